@@ -1,0 +1,33 @@
+"""nmmm — nano–micro–meso–macro: predictive colour and appearance of paints and coatings.
+
+Data flows one way, from small scales to large, through one sub-package per scale:
+``materials`` → ``ellipsometry`` → ``ema`` → ``microstructure`` → ``homogenize`` →
+``layers`` → ``appearance`` → ``experiment`` → ``recipes``.
+
+Conventions: wavelengths in nanometres at every public interface; n + ik with k ≥ 0;
+ε = (n + ik)² with Im ε ≥ 0; time dependence exp(−iωt); volume fractions in [0, 1];
+angles in degrees. Sub-packages are imported on demand (``import nmmm.layers``).
+"""
+
+from nmmm.errors import (
+    ConvergenceError,
+    DataFileError,
+    InvalidInputError,
+    MaterialNotFoundError,
+    NmmmError,
+    OutOfRangeError,
+    RecipeError,
+)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ConvergenceError",
+    "DataFileError",
+    "InvalidInputError",
+    "MaterialNotFoundError",
+    "NmmmError",
+    "OutOfRangeError",
+    "RecipeError",
+    "__version__",
+]

@@ -1,0 +1,88 @@
+"""The ``nmmm`` command line.
+
+Each scale contributes its own ``click`` group from a ``cli`` module inside its package;
+this file only lists them and imports each on demand, so that ``nmmm --help`` is fast and
+a problem in one package cannot break the others' commands.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+import click
+
+from nmmm.errors import NmmmError
+
+#: command name -> "module:attribute" of a click command or group
+COMMANDS: dict[str, tuple[str, str]] = {
+    "materials": ("nmmm.materials.cli:materials", "Optical constants: search, show, plot."),
+    "ema": ("nmmm.ema.cli:ema", "Effective-medium approximations."),
+    "ellipsometry": ("nmmm.ellipsometry.cli:ellipsometry", "Fit ellipsometric data (Psi, Delta)."),
+    "micro": ("nmmm.microstructure.cli:micro", "Random microstructures and SEM image analysis."),
+    "homogenize": ("nmmm.homogenize.cli:homogenize", "FFT homogenization of microstructures."),
+    "layers": ("nmmm.layers.cli:layers", "Mie scattering, radiative transfer, thin films."),
+    "appearance": ("nmmm.appearance.cli:appearance", "BRDFs and multi-angle colour."),
+    "render": ("nmmm.appearance.render.cli:render", "Spectral rendering of plates and objects."),
+    "experiment": ("nmmm.experiment.cli:experiment", "The 2AFC visual validation experiment."),
+    "run": ("nmmm.recipes.cli:run", "Run a TOML recipe."),
+    "demo": ("nmmm.recipes.cli:demo", "Run the seed paper's worked examples into one report."),
+    "compare": ("nmmm.recipes.cli:compare", "Compare two recipes (substitution view)."),
+    "sweep": ("nmmm.recipes.cli:sweep", "Parameter sweep of a recipe on Dask."),
+}
+
+
+class LazyGroup(click.Group):
+    """A click group whose sub-commands are imported only when used."""
+
+    def list_commands(self, ctx):
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx, name):
+        if name not in COMMANDS:
+            return None
+        target, help_text = COMMANDS[name]
+        module_name, attr = target.split(":")
+        try:
+            module = importlib.import_module(module_name)
+            return getattr(module, attr)
+        except (ImportError, AttributeError) as exc:
+            @click.command(name=name, help=f"{help_text} (unavailable: {exc})")
+            def unavailable():
+                raise click.ClickException(f"'nmmm {name}' is not available: {exc}")
+
+            return unavailable
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="nmmm")
+def cli():
+    """nmmm — predictive colour and appearance, from nano to macro.
+
+    Wavelengths are in nm, lengths in nm, angles in degrees, fractions in [0, 1].
+    """
+
+
+def main(argv=None):
+    """Entry point of the ``nmmm`` console script; nmmm errors become clean messages."""
+    try:
+        cli.main(args=argv, standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("Aborted.", err=True)
+        return 1
+    except click.ClickException as exc:
+        exc.show()
+        return exc.exit_code
+    except NmmmError as exc:
+        click.echo(f"error: {exc}", err=True)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+
+
+def run_main():
+    """Console-script wrapper: exit with :func:`main`'s status."""
+    sys.exit(main())

@@ -1,0 +1,201 @@
+"""The :class:`Material` type: a compound's complex refractive index n + ik over wavelength.
+
+Every compound of nmmm — database entries, dispersion models, user files, effective media,
+homogenized microstructures — is a :class:`Material`. It is evaluated on any wavelength
+array (nm) and broadcasts; outside :attr:`Material.range_nm` it raises
+:class:`nmmm.OutOfRangeError` unless the caller passes ``extrapolate=True``.
+
+- :class:`Material` — base class: ``nk(wavelength_nm)``, ``eps(wavelength_nm)``, ``range_nm``.
+- :class:`TabulatedMaterial` — n and k at nodes, interpolated linearly in wavelength.
+- :class:`DerivedMaterial` — ε given by a function of wavelength (effective media,
+  mixtures), its range the intersection of its components' ranges.
+- :func:`nk_to_eps`, :func:`eps_to_nk` — eq. (1) of the seed paper.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from nmmm.errors import InvalidInputError, OutOfRangeError
+from nmmm.spectra import as_wavelength_nm, check_finite
+
+#: hc in eV·nm, to convert photon energy and wavelength: E[eV] = HC_EV_NM / λ[nm].
+HC_EV_NM = 1239.841984
+
+
+def nk_to_eps(nk):
+    """ε = ε1 + iε2 = (n + ik)², i.e. ε1 = n² − k², ε2 = 2nk."""
+    nk = np.asarray(nk, dtype=complex)
+    return nk * nk
+
+
+def eps_to_nk(eps):
+    """n + ik from ε, eq. (1) of the seed paper (Born & Wolf):
+
+    n = sqrt((ε1 + |ε|)/2), k = sqrt((−ε1 + |ε|)/2), the root with n ≥ 0, k ≥ 0 for ε2 ≥ 0.
+    """
+    eps = np.asarray(eps, dtype=complex)
+    mod = np.abs(eps)
+    n = np.sqrt(np.maximum((eps.real + mod) / 2, 0.0))
+    k = np.sqrt(np.maximum((-eps.real + mod) / 2, 0.0))
+    # for ε2 < 0 (gain; only in intermediate computations) keep the sign consistent
+    k = np.where(eps.imag < 0, -k, k)
+    return n + 1j * k
+
+
+class Material:
+    """Base class of every compound.
+
+    Subclasses implement ``_nk(w_nm)`` or ``_eps(w_nm)`` (the other follows) for a
+    validated float wavelength array in nm, and set ``name``, ``reference`` and
+    ``range_nm`` (``(-inf, inf)``-like bounds for analytic models: ``(0, inf)``).
+    """
+
+    name: str = "material"
+    reference: str = ""
+    range_nm: tuple[float, float] = (0.0, np.inf)
+
+    # -- to be provided by subclasses (one of the two) --------------------------------
+    def _nk(self, w_nm: np.ndarray) -> np.ndarray:
+        if type(self)._eps is Material._eps:
+            raise NotImplementedError(f"{type(self).__name__} defines neither _nk nor _eps")
+        return eps_to_nk(self._eps(w_nm))
+
+    def _eps(self, w_nm: np.ndarray) -> np.ndarray:
+        if type(self)._nk is Material._nk:
+            raise NotImplementedError(f"{type(self).__name__} defines neither _nk nor _eps")
+        return nk_to_eps(self._nk(w_nm))
+
+    # -- public interface ---------------------------------------------------------------
+    def check_range(self, wavelength_nm, extrapolate: bool = False) -> np.ndarray:
+        """Validate wavelengths (finite, > 0) and, unless ``extrapolate``, that they lie in ``range_nm``."""
+        w = as_wavelength_nm(wavelength_nm)
+        lo, hi = self.range_nm
+        if not extrapolate and w.size and (w.min() < lo * (1 - 1e-9) or w.max() > hi * (1 + 1e-9)):
+            raise OutOfRangeError(
+                f"wavelength {w.min():g}–{w.max():g} nm is outside the data range of "
+                f"'{self.name}' ({lo:g}–{hi:g} nm); choose wavelengths inside it, another "
+                "source for this compound, or pass extrapolate=True explicitly"
+            )
+        return w
+
+    def nk(self, wavelength_nm, extrapolate: bool = False) -> np.ndarray:
+        """Complex refractive index n + ik (k ≥ 0) at ``wavelength_nm`` (any shape)."""
+        w = self.check_range(wavelength_nm, extrapolate)
+        return np.asarray(self._nk(w), dtype=complex)
+
+    def eps(self, wavelength_nm, extrapolate: bool = False) -> np.ndarray:
+        """Complex relative permittivity ε = (n + ik)² at ``wavelength_nm`` (any shape)."""
+        w = self.check_range(wavelength_nm, extrapolate)
+        return np.asarray(self._eps(w), dtype=complex)
+
+    def n(self, wavelength_nm, extrapolate: bool = False) -> np.ndarray:
+        """Real part of the refractive index."""
+        return self.nk(wavelength_nm, extrapolate).real
+
+    def k(self, wavelength_nm, extrapolate: bool = False) -> np.ndarray:
+        """Extinction coefficient k ≥ 0."""
+        return self.nk(wavelength_nm, extrapolate).imag
+
+    def __repr__(self) -> str:
+        lo, hi = self.range_nm
+        return f"<{type(self).__name__} '{self.name}' {lo:g}–{hi:g} nm>"
+
+
+def _intersect_ranges(materials) -> tuple[float, float]:
+    lo, hi = 0.0, np.inf
+    for m in materials:
+        lo, hi = max(lo, m.range_nm[0]), min(hi, m.range_nm[1])
+    if lo >= hi:
+        names = ", ".join(m.name for m in materials)
+        raise OutOfRangeError(f"the wavelength ranges of {names} do not overlap")
+    return lo, hi
+
+
+@dataclass(frozen=True, repr=False)
+class TabulatedMaterial(Material):
+    """n and k tabulated at wavelength nodes, **interpolated linearly in wavelength**
+    (n and k separately); outside the nodes an :class:`OutOfRangeError` is raised, or with
+    ``extrapolate=True`` the end values are held constant.
+    """
+
+    name: str
+    wavelength_nm: np.ndarray
+    n_values: np.ndarray
+    k_values: np.ndarray
+    reference: str = ""
+
+    def __post_init__(self):
+        w = np.asarray(self.wavelength_nm, dtype=float)
+        n = np.asarray(self.n_values, dtype=float)
+        k = np.asarray(self.k_values, dtype=float)
+        if w.ndim != 1 or w.shape != n.shape or w.shape != k.shape or w.size < 1:
+            raise InvalidInputError(f"{self.name}: wavelength, n and k must be 1-D arrays of equal length")
+        for arr, what in ((w, "wavelength"), (n, "n"), (k, "k")):
+            if not np.all(np.isfinite(arr)):
+                i = int(np.flatnonzero(~np.isfinite(arr))[0])
+                raise InvalidInputError(f"{self.name}: {what} is not finite at row {i}")
+        if np.any(np.diff(w) <= 0):
+            i = int(np.flatnonzero(np.diff(w) <= 0)[0]) + 1
+            raise InvalidInputError(
+                f"{self.name}: wavelengths must increase strictly; row {i} ({w[i]:g} nm) "
+                f"does not follow row {i - 1} ({w[i - 1]:g} nm)"
+            )
+        if np.any(k < 0):
+            i = int(np.flatnonzero(k < 0)[0])
+            raise InvalidInputError(f"{self.name}: k < 0 at row {i} ({w[i]:g} nm, k = {k[i]:g}); nmmm needs k >= 0")
+        object.__setattr__(self, "wavelength_nm", w)
+        object.__setattr__(self, "n_values", n)
+        object.__setattr__(self, "k_values", k)
+
+    @property
+    def range_nm(self) -> tuple[float, float]:  # type: ignore[override]
+        return float(self.wavelength_nm[0]), float(self.wavelength_nm[-1])
+
+    def _nk(self, w_nm):
+        n = np.interp(w_nm, self.wavelength_nm, self.n_values)
+        k = np.interp(w_nm, self.wavelength_nm, self.k_values)
+        return n + 1j * k
+
+
+@dataclass(frozen=True, repr=False)
+class DerivedMaterial(Material):
+    """A material whose ε is a function of wavelength built from other materials.
+
+    ``eps_function(w_nm)`` receives a validated float array (nm) and returns complex ε.
+    ``range_nm`` defaults to the intersection of the ``components``' ranges. Used for
+    mixtures, effective media and homogenized microstructures, so that each level's result
+    is a compound of the next.
+    """
+
+    name: str
+    eps_function: Callable[[np.ndarray], np.ndarray]
+    components: tuple = ()
+    reference: str = ""
+    range_override_nm: tuple[float, float] | None = None
+    metadata: dict = field(default_factory=dict)
+
+    @property
+    def range_nm(self) -> tuple[float, float]:  # type: ignore[override]
+        if self.range_override_nm is not None:
+            return tuple(map(float, self.range_override_nm))
+        return _intersect_ranges(self.components) if self.components else (0.0, np.inf)
+
+    def _eps(self, w_nm):
+        return self.eps_function(w_nm)
+
+
+def as_material(value, name: str | None = None) -> Material:
+    """Return ``value`` if it is a :class:`Material`; a constant complex n + ik becomes a
+    non-dispersive material (for quick studies and tests)."""
+    if isinstance(value, Material):
+        return value
+    nk = complex(check_finite(value, "refractive index"))
+    if nk.imag < 0:
+        raise InvalidInputError(f"refractive index {nk} has k < 0; nmmm uses n + ik with k >= 0")
+    from nmmm.materials.models import Constant
+
+    return Constant(nk=nk, name=name or f"n={nk:g}")
