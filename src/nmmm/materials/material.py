@@ -54,9 +54,11 @@ class Material:
     ``range_nm`` (``(-inf, inf)``-like bounds for analytic models: ``(0, inf)``).
     """
 
-    name: str = "material"
-    reference: str = ""
-    range_nm: tuple[float, float] = (0.0, np.inf)
+    # Subclasses provide these (as dataclass fields or properties); no class defaults here,
+    # so that dataclass subclasses can declare them as required fields.
+    name: str
+    reference: str
+    range_nm: tuple[float, float]
 
     # -- to be provided by subclasses (one of the two) --------------------------------
     def _nk(self, w_nm: np.ndarray) -> np.ndarray:

