@@ -1,0 +1,411 @@
+"""Ellipsometric data sets (Ψ, Δ at wavelengths and angles) and their files.
+
+Public objects
+--------------
+- :class:`EllipsometryData` — flat arrays of wavelength, angle, Ψ, Δ and optional σΨ, σΔ.
+- :func:`read_csv` — plain CSV with a header naming the columns.
+- :func:`read_woollam` — J. A. Woollam ASCII exports (WVASE ``.dat``, CompleteEASE).
+- :func:`read_data` — dispatcher on the file's content/suffix (``DATA_READERS`` registry).
+- :func:`write_csv` — write a data set as plain CSV (readable by :func:`read_csv`).
+- :func:`write_material_csv` — write fitted n, k as a Material file for
+  ``nmmm.materials.read_csv``.
+
+Plain CSV format
+----------------
+Comma-separated (``#`` starts a comment line), one header row naming the columns, case and
+spaces ignored; the wavelength column name carries its unit::
+
+    wavelength_nm, angle_deg, psi_deg, delta_deg, sigma_psi_deg, sigma_delta_deg
+    400, 65, 22.41, 118.6, 0.02, 0.05
+
+Accepted names: ``wavelength_nm`` / ``wavelength`` (nm), ``wavelength_um``, ``energy_ev``;
+``angle_deg`` / ``angle`` / ``aoi``; ``psi_deg`` / ``psi``; ``delta_deg`` / ``delta``;
+optional ``sigma_psi_deg`` / ``sigma_psi`` / ``psi_err`` and ``sigma_delta_deg`` /
+``sigma_delta`` / ``delta_err``. A missing required column raises :class:`DataFileError`.
+
+Woollam ASCII format (WVASE32 ``.dat`` and CompleteEASE export)
+--------------------------------------------------------------
+Header lines first (a title, optional ``VASEmethod[...]`` / ``Original[...]`` lines), the
+last of which names the spectral unit: ``nm``, ``eV``, ``Angstroms`` or ``microns``/``um``.
+Then one line per data point, whitespace separated, either
+
+    E  <wavelength>  <angle>  <Ψ>  <Δ>  <σΨ>  <σΔ>     (tagged; CompleteEASE, WVASE "E" lines)
+    <wavelength>  <angle>  <Ψ>  <Δ>  <σΨ>  <σΔ>        (untagged WVASE tabular)
+
+Only ellipsometric Ψ/Δ lines (tag ``E``) are read; other tags (``T``, ``R``, ``dpolE`` …)
+are skipped and counted in ``metadata``. The tan Ψ / cos Δ variant (``nm TRIG`` header) is
+refused with a clear error. σ columns are optional.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from nmmm.ellipsometry.forward import check_angle_deg, check_psi_deg
+from nmmm.errors import DataFileError, InvalidInputError
+from nmmm.materials.material import HC_EV_NM
+from nmmm.spectra import as_wavelength_nm, check_finite, check_positive
+
+__all__ = [
+    "EllipsometryData",
+    "read_csv",
+    "read_woollam",
+    "read_data",
+    "write_csv",
+    "write_material_csv",
+    "DATA_READERS",
+]
+
+
+@dataclass(frozen=True, repr=False)
+class EllipsometryData:
+    """Measured (or simulated) Ψ and Δ at N (wavelength, angle) points — flat arrays of length N.
+
+    Attributes
+    ----------
+    wavelength_nm, angle_deg, psi_deg, delta_deg : ndarray (N,)
+    sigma_psi_deg, sigma_delta_deg : ndarray (N,) or None
+        Standard uncertainties; ``None`` when the file gave none (fits then scale the
+        parameter covariance by the reduced χ²).
+    name : str
+    metadata : dict
+    """
+
+    wavelength_nm: np.ndarray
+    angle_deg: np.ndarray
+    psi_deg: np.ndarray
+    delta_deg: np.ndarray
+    sigma_psi_deg: np.ndarray | None = None
+    sigma_delta_deg: np.ndarray | None = None
+    name: str = "data"
+    metadata: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        w = as_wavelength_nm(np.atleast_1d(self.wavelength_nm)).ravel()
+        n = w.size
+        if n == 0:
+            raise InvalidInputError(f"{self.name}: no data points")
+
+        def _vec(x, what):
+            a = np.asarray(x, dtype=float)
+            if a.ndim == 0:
+                a = np.full(n, float(a))
+            a = a.ravel()
+            if a.size != n:
+                raise InvalidInputError(f"{self.name}: {what} has {a.size} values but wavelength_nm has {n}")
+            return a
+
+        a = check_angle_deg(_vec(self.angle_deg, "angle_deg"), f"{self.name}: angle_deg")
+        p = check_psi_deg(_vec(self.psi_deg, "psi_deg"), f"{self.name}: psi_deg")
+        d = check_finite(_vec(self.delta_deg, "delta_deg"), f"{self.name}: delta_deg")
+        object.__setattr__(self, "wavelength_nm", w)
+        object.__setattr__(self, "angle_deg", a)
+        object.__setattr__(self, "psi_deg", p)
+        object.__setattr__(self, "delta_deg", d)
+        for attr in ("sigma_psi_deg", "sigma_delta_deg"):
+            s = getattr(self, attr)
+            if s is not None:
+                s = check_positive(_vec(s, attr), f"{self.name}: {attr}")
+                object.__setattr__(self, attr, s)
+        if (self.sigma_psi_deg is None) != (self.sigma_delta_deg is None):
+            raise InvalidInputError(f"{self.name}: give both sigma_psi_deg and sigma_delta_deg, or neither")
+
+    # -- convenience ------------------------------------------------------------------
+    def __len__(self) -> int:
+        return self.wavelength_nm.size
+
+    def __repr__(self) -> str:
+        return (f"<EllipsometryData '{self.name}': {len(self)} points, "
+                f"{self.wavelength_nm.min():g}-{self.wavelength_nm.max():g} nm, "
+                f"angles {', '.join(f'{a:g}' for a in self.angles_deg)} deg>")
+
+    @property
+    def has_sigma(self) -> bool:
+        return self.sigma_psi_deg is not None
+
+    @property
+    def angles_deg(self) -> np.ndarray:
+        """The distinct angles of incidence."""
+        return np.unique(self.angle_deg)
+
+    def subset(self, mask) -> "EllipsometryData":
+        """The points where ``mask`` is true (boolean or index array)."""
+        m = np.asarray(mask)
+        sig = (None, None) if not self.has_sigma else (self.sigma_psi_deg[m], self.sigma_delta_deg[m])
+        return EllipsometryData(self.wavelength_nm[m], self.angle_deg[m], self.psi_deg[m], self.delta_deg[m],
+                                sig[0], sig[1], name=self.name, metadata=dict(self.metadata))
+
+    def at_angle(self, angle_deg=None) -> "EllipsometryData":
+        """Points at one angle (default: the only one), sorted by wavelength."""
+        angles = self.angles_deg
+        if angle_deg is None:
+            if angles.size != 1:
+                raise InvalidInputError(
+                    f"{self.name} holds several angles ({', '.join(f'{a:g}' for a in angles)} deg); "
+                    "choose one with angle_deg=")
+            angle_deg = angles[0]
+        sel = np.isclose(self.angle_deg, float(angle_deg), atol=1e-6)
+        if not sel.any():
+            raise InvalidInputError(f"{self.name} has no data at {angle_deg:g} deg; it has "
+                                    f"{', '.join(f'{a:g}' for a in angles)} deg")
+        idx = np.flatnonzero(sel)
+        idx = idx[np.argsort(self.wavelength_nm[idx], kind="stable")]
+        return self.subset(idx)
+
+    def within(self, wavelength_min_nm=None, wavelength_max_nm=None) -> "EllipsometryData":
+        """Points inside a wavelength window."""
+        lo = -np.inf if wavelength_min_nm is None else wavelength_min_nm
+        hi = np.inf if wavelength_max_nm is None else wavelength_max_nm
+        m = (self.wavelength_nm >= lo) & (self.wavelength_nm <= hi)
+        if not m.any():
+            raise InvalidInputError(f"{self.name}: no data between {lo:g} and {hi:g} nm")
+        return self.subset(m)
+
+    @classmethod
+    def from_model(cls, stack, wavelength_nm, angle_deg, sigma_psi_deg=None, sigma_delta_deg=None,
+                   noise_seed=None, name: str = "synthetic") -> "EllipsometryData":
+        """Synthetic data of ``stack`` on the grid wavelength × angle; with ``noise_seed`` set,
+        Gaussian noise of the given σ is added (a synthetic measurement)."""
+        from nmmm.ellipsometry.forward import psi_delta
+
+        w = as_wavelength_nm(np.atleast_1d(wavelength_nm)).ravel()
+        a = check_angle_deg(np.atleast_1d(angle_deg)).ravel()
+        W, A = np.meshgrid(w, a, indexing="ij")
+        W, A = W.ravel(), A.ravel()
+        psi, delta = psi_delta(stack, W, A)
+        sp = None if sigma_psi_deg is None else np.broadcast_to(np.asarray(sigma_psi_deg, float), W.shape).copy()
+        sd = None if sigma_delta_deg is None else np.broadcast_to(np.asarray(sigma_delta_deg, float), W.shape).copy()
+        if noise_seed is not None:
+            if sp is None or sd is None:
+                raise InvalidInputError("noise needs sigma_psi_deg and sigma_delta_deg")
+            rng = np.random.default_rng(noise_seed)
+            psi = np.clip(psi + rng.normal(0.0, sp), 0.0, 90.0)
+            delta = delta + rng.normal(0.0, sd)
+        return cls(W, A, psi, delta, sp, sd, name=name, metadata={"source": "model"})
+
+    def to_dataframe(self):
+        """A pandas DataFrame of the columns (pandas is optional, imported here only)."""
+        import pandas as pd
+
+        cols = {"wavelength_nm": self.wavelength_nm, "angle_deg": self.angle_deg,
+                "psi_deg": self.psi_deg, "delta_deg": self.delta_deg}
+        if self.has_sigma:
+            cols.update(sigma_psi_deg=self.sigma_psi_deg, sigma_delta_deg=self.sigma_delta_deg)
+        return pd.DataFrame(cols)
+
+
+# ----------------------------------------------------------------------------------------
+# plain CSV
+# ----------------------------------------------------------------------------------------
+_ALIASES = {
+    "wavelength_nm": ("wavelength_nm", "wavelength", "lambda_nm", "wl_nm", "wl"),
+    "wavelength_um": ("wavelength_um", "wavelength_µm", "wavelength_micron"),
+    "energy_ev": ("energy_ev", "energy", "e_ev"),
+    "angle_deg": ("angle_deg", "angle", "aoi", "aoi_deg", "angle_of_incidence"),
+    "psi_deg": ("psi_deg", "psi", "ψ"),
+    "delta_deg": ("delta_deg", "delta", "δ"),
+    "sigma_psi_deg": ("sigma_psi_deg", "sigma_psi", "psi_err", "psi_sigma", "dpsi"),
+    "sigma_delta_deg": ("sigma_delta_deg", "sigma_delta", "delta_err", "delta_sigma", "ddelta"),
+}
+
+
+def _norm(name: str) -> str:
+    return re.sub(r"[\s\-()\[\]]+", "_", name.strip().lower()).strip("_")
+
+
+def read_csv(path, name: str | None = None) -> EllipsometryData:
+    """Read a plain CSV of Ψ, Δ (see the module docstring for the columns).
+
+    Raises :class:`DataFileError` naming the file (and row) when it is missing, a required
+    column is absent, or a value is not a number; :class:`InvalidInputError` for values
+    out of range (Ψ outside [0°, 90°], ...).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataFileError(f"ellipsometry data file not found: {path}")
+    text = path.read_text(encoding="utf-8-sig")
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(lines) < 2:
+        raise DataFileError(f"{path}: needs a header row and at least one data row")
+    reader = csv.reader(io.StringIO("\n".join(lines)))
+    header = [_norm(h) for h in next(reader)]
+    col = {}
+    for key, aliases in _ALIASES.items():
+        for i, h in enumerate(header):
+            if h in aliases:
+                col[key] = i
+                break
+    wl_keys = [k for k in ("wavelength_nm", "wavelength_um", "energy_ev") if k in col]
+    missing = [k for k in ("angle_deg", "psi_deg", "delta_deg") if k not in col]
+    if not wl_keys:
+        missing.insert(0, "wavelength_nm (or wavelength_um / energy_ev)")
+    if missing:
+        raise DataFileError(
+            f"{path}: missing column(s) {', '.join(missing)}; the header has {', '.join(header)}. "
+            "Expected: wavelength_nm, angle_deg, psi_deg, delta_deg[, sigma_psi_deg, sigma_delta_deg]")
+    rows = []
+    for r_i, row in enumerate(reader, start=2):
+        if len(row) < len(header):
+            raise DataFileError(f"{path}, data row {r_i}: {len(row)} fields, header has {len(header)}")
+        try:
+            rows.append([float(x) for x in row[: len(header)]])
+        except ValueError:
+            raise DataFileError(f"{path}, data row {r_i}: not a number in {row!r}") from None
+    arr = np.array(rows, dtype=float)
+    wkey = wl_keys[0]
+    wl = arr[:, col[wkey]]
+    if wkey == "wavelength_um":
+        wl = wl * 1e3
+    elif wkey == "energy_ev":
+        if np.any(wl <= 0):
+            raise DataFileError(f"{path}: photon energies must be > 0 eV")
+        wl = HC_EV_NM / wl
+    has_sig = "sigma_psi_deg" in col and "sigma_delta_deg" in col
+    try:
+        return EllipsometryData(
+            wl, arr[:, col["angle_deg"]], arr[:, col["psi_deg"]], arr[:, col["delta_deg"]],
+            arr[:, col["sigma_psi_deg"]] if has_sig else None,
+            arr[:, col["sigma_delta_deg"]] if has_sig else None,
+            name=name or path.stem, metadata={"path": str(path), "format": "csv"})
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{path}: {exc}") from None
+
+
+def write_csv(data: EllipsometryData, path) -> Path:
+    """Write ``data`` as a plain CSV that :func:`read_csv` reads back."""
+    path = Path(path)
+    cols = ["wavelength_nm", "angle_deg", "psi_deg", "delta_deg"]
+    arrs = [data.wavelength_nm, data.angle_deg, data.psi_deg, data.delta_deg]
+    if data.has_sigma:
+        cols += ["sigma_psi_deg", "sigma_delta_deg"]
+        arrs += [data.sigma_psi_deg, data.sigma_delta_deg]
+    with path.open("w", newline="") as f:
+        f.write(f"# {data.name}: ellipsometric angles, Delta convention of nmmm.ellipsometry.forward\n")
+        w = csv.writer(f)
+        w.writerow(cols)
+        for row in zip(*arrs):
+            w.writerow([f"{v:.10g}" for v in row])
+    return path
+
+
+# ----------------------------------------------------------------------------------------
+# J. A. Woollam ASCII
+# ----------------------------------------------------------------------------------------
+_UNITS_TO_NM = {"nm": ("nm", 1.0), "nanometers": ("nm", 1.0), "angstroms": ("nm", 0.1), "a": ("nm", 0.1),
+                "microns": ("nm", 1e3), "um": ("nm", 1e3), "µm": ("nm", 1e3), "ev": ("ev", None)}
+_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_TAGGED = re.compile(rf"^\s*([A-Za-z][A-Za-z0-9]*)((?:\s+{_NUM}){{4,6}})\s*$")
+_UNTAGGED = re.compile(rf"^\s*((?:{_NUM}\s+){{3,5}}{_NUM})\s*$")
+
+
+def read_woollam(path, name: str | None = None) -> EllipsometryData:
+    """Read a J. A. Woollam ASCII Ψ/Δ export (WVASE32 ``.dat`` or CompleteEASE); see the module
+    docstring for the layout supported."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataFileError(f"ellipsometry data file not found: {path}")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        text = path.read_text(encoding="latin-1")
+    header, rows, skipped = [], [], {}
+    unit = None
+    for i, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        m_t = _TAGGED.match(line)
+        m_u = None if m_t else _UNTAGGED.match(line)
+        if m_t is None and m_u is None:
+            if rows:
+                raise DataFileError(f"{path}, line {i}: cannot read {line!r} among the data lines")
+            header.append(line)
+            low = line.lower()
+            if re.match(r"^[a-zµ]+\s+trig\b", low):
+                raise DataFileError(f"{path}: the tan(Psi)/cos(Delta) ('TRIG') variant is not supported; "
+                                    "export Psi/Delta from WVASE instead")
+            if low in _UNITS_TO_NM:
+                unit = low
+            continue
+        if m_t is not None:
+            tag = m_t.group(1)
+            if tag != "E":
+                skipped[tag] = skipped.get(tag, 0) + 1
+                continue
+            nums = m_t.group(2).split()
+        else:
+            nums = m_u.group(1).split()
+        rows.append([float(x) for x in nums] + [np.nan] * (6 - len(nums)))
+    if not rows:
+        raise DataFileError(f"{path}: no Psi/Delta data lines ('E wavelength angle psi delta [sigpsi sigdelta]') found")
+    if unit is None:
+        raise DataFileError(f"{path}: no spectral unit line (nm, eV, Angstroms or microns) in the header "
+                            f"{header!r}; the last header line of a WVASE file names it")
+    arr = np.array(rows, dtype=float)
+    kind, scale = _UNITS_TO_NM[unit]
+    spectral = arr[:, 0]
+    wl = HC_EV_NM / spectral if kind == "ev" else spectral * scale
+    has_sig = not np.isnan(arr[:, 4:6]).any()
+    try:
+        return EllipsometryData(
+            wl, arr[:, 1], arr[:, 2], arr[:, 3],
+            arr[:, 4] if has_sig else None, arr[:, 5] if has_sig else None,
+            name=name or (header[0] if header else path.stem),
+            metadata={"path": str(path), "format": "woollam", "header": header, "unit": unit,
+                      "skipped_lines": skipped})
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{path}: {exc}") from None
+
+
+#: reader name -> function(path, name=None) -> EllipsometryData
+DATA_READERS = {"csv": read_csv, "woollam": read_woollam}
+
+
+def read_data(path, format: str | None = None, name: str | None = None) -> EllipsometryData:
+    """Read an ellipsometry file; ``format`` one of :data:`DATA_READERS` or ``None`` to decide from
+    the suffix (``.csv`` → csv; ``.dat``/``.txt`` → woollam)."""
+    path = Path(path)
+    if format is None:
+        format = "csv" if path.suffix.lower() == ".csv" else "woollam"
+    try:
+        reader = DATA_READERS[format]
+    except KeyError:
+        raise InvalidInputError(f"unknown data format {format!r}; choose one of {sorted(DATA_READERS)}") from None
+    return reader(path, name=name)
+
+
+def write_material_csv(path, wavelength_nm, nk, name: str = "fitted", reference: str = "",
+                       sigma_n=None, sigma_k=None) -> Path:
+    """Write optical constants as the CSV Material file that ``nmmm.materials.read_csv`` loads.
+
+    Layout: ``#`` comment lines (name, reference), a header ``wavelength_nm,n,k`` (plus
+    ``sigma_n,sigma_k`` when given), rows in increasing wavelength.
+    """
+    from nmmm.spectra import check_nk
+
+    w = as_wavelength_nm(np.atleast_1d(wavelength_nm)).ravel()
+    nk = check_nk(np.atleast_1d(nk), "nk").ravel()
+    if nk.size != w.size:
+        raise InvalidInputError(f"nk has {nk.size} values for {w.size} wavelengths")
+    order = np.argsort(w)
+    path = Path(path)
+    cols = ["wavelength_nm", "n", "k"]
+    arrs = [w[order], nk.real[order], nk.imag[order]]
+    if sigma_n is not None and sigma_k is not None:
+        cols += ["sigma_n", "sigma_k"]
+        arrs += [np.asarray(sigma_n, float).ravel()[order], np.asarray(sigma_k, float).ravel()[order]]
+    with path.open("w", newline="") as f:
+        f.write(f"# name: {name}\n")
+        if reference:
+            f.write(f"# reference: {reference}\n")
+        wr = csv.writer(f)
+        wr.writerow(cols)
+        for row in zip(*arrs):
+            wr.writerow([f"{v:.10g}" for v in row])
+    return path
