@@ -1,0 +1,54 @@
+"""Looyenga (Landau–Lifshitz–Looyenga) mixing rule: cube roots of ε add linearly.
+
+- :func:`looyenga` — ``eps^(1/3) = Σ_i f_i eps_i^(1/3)``, n phases or the two-phase form.
+
+Notes
+-----
+Symmetric in the phases; derived for small contrast (|eps_i − eps_j| ≪ |eps|), where it
+agrees with Bruggeman and Maxwell Garnett to second order; it is often used for porous
+dielectrics. The principal cube root is the right branch: for Im ε_i >= 0 every cube root
+lies in the sector 0 <= arg <= π/3, so their mean does too and its cube has Im ε >= 0.
+
+References
+----------
+- H. Looyenga, "Dielectric constants of heterogeneous mixtures", Physica 31, 401 (1965),
+  doi:10.1016/0031-8914(65)90045-5.
+- L. D. Landau, E. M. Lifshitz, Electrodynamics of Continuous Media (Pergamon 1960), §9.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nmmm.ema._validation import as_eps, as_fraction
+from nmmm.errors import InvalidInputError
+
+
+def looyenga(eps_phases, fractions, fraction=None) -> np.ndarray:
+    """Looyenga effective permittivity: ``eps = (Σ_i f_i eps_i^(1/3))³``.
+
+    Call forms as :func:`nmmm.ema.bruggeman`: ``looyenga([eps_1, ...], [f_1, ...])`` or
+    ``looyenga(eps_inclusion, eps_host, fraction)``.
+
+    >>> round(float(looyenga(1.0, 8.0, 0.5).real), 6)   # ((1 + 2)/2)³
+    3.375
+    """
+    if fraction is not None:
+        eps_phases, fractions = [eps_phases, fractions], [fraction, 1 - as_fraction(fraction)]
+    if not isinstance(eps_phases, (list, tuple)) or not isinstance(fractions, (list, tuple)) \
+            or len(eps_phases) != len(fractions) or not eps_phases:
+        raise InvalidInputError("looyenga takes a list of phase permittivities and a list of as many "
+                                "fractions, or (eps_inclusion, eps_host, fraction)")
+    total = 0
+    acc = 0
+    for i, (e, f) in enumerate(zip(eps_phases, fractions)):
+        e = as_eps(e, f"eps_phases[{i}]")
+        f = as_fraction(f, f"fractions[{i}]")
+        total = total + f
+        acc = acc + f * np.power(e, 1 / 3)
+    if np.any(np.abs(np.asarray(total) - 1) > 1e-6):
+        raise InvalidInputError("Looyenga fractions must sum to 1 (list every phase)")
+    return acc**3
+
+
+__all__ = ["looyenga"]
