@@ -129,10 +129,20 @@ def roughness_material(below, void=1.0, fraction_void: float = 0.5, name: str = 
     """Surface roughness as an effective medium: Bruggeman mixture of the material below and
     void (50/50 by default), the standard overlayer of ellipsometry (Fujiwara 2007, §5.4;
     Aspnes, Theeten & Hottier 1979). Computed with :mod:`nmmm.ema`."""
-    from nmmm import ema
-    from nmmm.materials.material import as_material
+    from nmmm.ema.bruggeman import bruggeman
+    from nmmm.materials.material import DerivedMaterial, as_material
+    from nmmm.spectra import check_fraction
 
-    return ema.bruggeman_material(as_material(below), as_material(void, name="void"), fraction_void, name=name)
+    below = as_material(below)
+    void = as_material(void, name="void")
+    fv = float(check_fraction(fraction_void, "fraction_void"))
+
+    def eps(w):
+        return bruggeman(void.eps(w), below.eps(w), fv)
+
+    return DerivedMaterial(name=name, eps_function=eps, components=(below, void),
+                           reference=f"Bruggeman EMA, {fv:.0%} void in {below.name} (surface roughness)",
+                           metadata={"fraction_void": fv})
 
 
 def make_stack(ambient, layers, substrate):
@@ -288,10 +298,10 @@ class EllipsometryModel:
             if "thickness_nm" not in lay:
                 raise RecipeError(f"layer {lname!r}: needs thickness_nm (a number or {{value=..., fit=true}})")
             th = _param(f"{lname}.thickness_nm", lay["thickness_nm"], "nm")
-            if th.min < 0 or th.value < 0:
-                raise RecipeError(f"layer {lname!r}: thickness_nm must be >= 0 (and its min >= 0)")
             if th.vary and th.min == -np.inf:
                 th = Parameter(th.name, th.value, True, 0.0, th.max, "nm")
+            if th.value < 0 or (th.vary and th.min < 0):
+                raise RecipeError(f"layer {lname!r}: thickness_nm must be >= 0 (and its min >= 0)")
             if lay.get("roughness", False):
                 fv = float(lay.get("fraction_void", 0.5))
                 layers.append(_Layer(lname, th, None, True, fv))
