@@ -24,8 +24,11 @@ def _stack(n_list, d_list, c_list=None):
 
 
 @pytest.mark.parametrize("pol", ["s", "p"])
-def test_coherent_against_tmm_oblique_absorbing(pol):
-    res = _stack(N_LIST, D_LIST).rt(WL, ANG, layer_absorption=True)
+@pytest.mark.parametrize("method", ["numba", "numpy"])
+def test_coherent_against_tmm_oblique_absorbing(pol, method):
+    st = _stack(N_LIST, D_LIST)
+    res = st.rt(WL, ANG, method=method)
+    res_abs = st.rt(WL, ANG, layer_absorption=True)  # always the NumPy kernel
     for i, w in enumerate(WL):
         for j, a in enumerate(ANG):
             ref = tmm.coh_tmm(pol, N_LIST, D_LIST, np.radians(a), w)
@@ -33,8 +36,9 @@ def test_coherent_against_tmm_oblique_absorbing(pol):
             assert getattr(res, "t" + pol)[i, j] == pytest.approx(ref["t"], abs=1e-12)
             assert getattr(res, "R" + pol)[i, j] == pytest.approx(ref["R"], abs=1e-12)
             assert getattr(res, "T" + pol)[i, j] == pytest.approx(ref["T"], abs=1e-12)
+            assert getattr(res_abs, "R" + pol)[i, j] == pytest.approx(ref["R"], abs=1e-12)
             absorp = tmm.absorp_in_each_layer(ref)[1:-1]
-            np.testing.assert_allclose(getattr(res, "absorbed_" + pol)[:, i, j], absorp, atol=1e-12)
+            np.testing.assert_allclose(getattr(res_abs, "absorbed_" + pol)[:, i, j], absorp, atol=1e-12)
 
 
 @pytest.mark.parametrize("pol", ["s", "p"])
@@ -100,9 +104,10 @@ def test_brewster_angle_uncoated():
     assert float(Stack([], substrate=1.5).rt(550.0, theta_b).Rp) < 1e-25
 
 
-def test_thick_opaque_layer_is_stable():
+@pytest.mark.parametrize("method", ["numba", "numpy"])
+def test_thick_opaque_layer_is_stable(method):
     # a 10 µm metal layer: no overflow, T -> 0, R equals the bare metal
-    res = Stack([(0.2 + 3.0j, 1e4)], substrate=1.5).rt(WL, ANG)
+    res = Stack([(0.2 + 3.0j, 1e4)], substrate=1.5).rt(WL, ANG, method=method)
     assert np.all(np.isfinite(res.Rs)) and np.all(np.isfinite(res.rs))
     np.testing.assert_allclose(res.Ts, 0.0, atol=1e-200)
     np.testing.assert_allclose(res.Rs, fresnel(1.0, 0.2 + 3.0j, ANG).Rs[None, :] * np.ones((5, 1)), rtol=1e-12)
@@ -152,6 +157,7 @@ def test_material_layers_and_range_error():
         lambda: Stack([(1.5, 100.0)]).rt(550.0, -3.0),
         lambda: Stack([(1.5, 100.0)]).rt(np.nan, 0.0),
         lambda: Stack([(1.5, 100.0)]).rt(-550.0, 0.0),
+        lambda: Stack([(1.5, 100.0)]).rt(550.0, 0.0, method="fast"),
     ],
 )
 def test_bad_input(make):
