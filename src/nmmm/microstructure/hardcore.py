@@ -174,6 +174,16 @@ def rsa_centres(box_nm, exclusion_radii_nm, seed=None, periodic: bool = True, ma
     if n == 0:
         return centres
     rmax = float(radii.max())
+    vol = float(np.prod(box[:ndim]))
+    fill = float((math.pi * radii**2).sum() if ndim == 2 else (4 / 3 * math.pi * radii**3).sum()) / vol
+    jam, src = RSA_JAMMING[ndim]
+    equal = np.ptp(radii) <= 1e-9 * rmax
+    if (equal and fill >= jam) or fill >= 1.0:
+        raise InvalidInputError(
+            f"{n} exclusion zones would fill {fill:.4g} of the cell, beyond the RSA jamming limit {jam} "
+            f"({'spheres in 3-D' if ndim == 3 else 'discs in 2-D'}; {src}); lower the number or the radii, "
+            "or enlarge the cell"
+        )
     if ndim == 2:
         box[2] = 1.0
     ncell = np.maximum(1, np.floor(box / (2 * rmax)).astype(np.int64))
