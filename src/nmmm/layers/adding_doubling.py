@@ -1,0 +1,338 @@
+"""Adding–doubling solution of the radiative transfer equation in a plane-parallel
+scattering slab with Fresnel boundaries — the accurate reference for pigmented films.
+
+Public functions
+----------------
+- :func:`adding_doubling` — reflectance and transmittance of a slab (albedo, optical
+  thickness, Henyey–Greenstein g, index) between an ambient medium and either a second
+  medium (an interface) or a Lambertian substrate in optical contact, optionally under a
+  non-scattering absorbing clear coat of the same index. Vectorised: every argument
+  broadcasts; all slabs of a batch are solved together with batched linear algebra.
+- :func:`radau_quadrature`, :func:`gauss_quadrature` — nodes and weights on [a, b].
+- :class:`ADResult` — the result.
+
+Method (Prahl 1995; van de Hulst 1980)
+--------------------------------------
+The azimuth-averaged radiance is discretised at N cosines ν_j in each hemisphere: Gauss
+points on (0, ν_c) and Radau points on (ν_c, 1] (ν = 1, normal incidence, is a node),
+ν_c = cosine of the critical angle in the slab; Radau points on (0, 1] when the slab
+index equals the ambient one. The Henyey–Greenstein phase function is expanded in Legendre
+polynomials and truncated with Wiscombe's (1977) δ-M method (f = g^N). A thin layer is
+started with Wiscombe's (1976) diamond initialization and doubled to the full thickness;
+layers are combined by the adding equations. Reflection and transmission are kept as
+*radiance operators* (radiance out = operator · radiance in, the quadrature weights 2ν_j w_j
+folded in), so adding is plain matrix algebra:
+
+    R_12 = R_1 + T_1 R_2 (I − R_1 R_2)⁻¹ T_1 ,    T_12 = T_2 (I − R_1 R_2)⁻¹ T_1
+
+The top interface is a diagonal Fresnel reflector for light from inside (total internal
+reflection beyond ν_c); incident radiance is refracted into the slab with the n² law.
+Power (flux) results: collimated normal incidence (``reflectance`` includes the specular
+reflection of the top surface; ``specular_reflectance`` gives it separately) and diffuse
+(Lambertian) incidence.
+
+References
+----------
+- S. A. Prahl, "The adding-doubling method", in *Optical-Thermal Response of
+  Laser-Irradiated Tissue*, A. J. Welch, M. J. C. van Gemert (eds.), Plenum (1995), ch. 5.
+  doi:10.1007/978-1-4757-6092-7_5
+- H. C. van de Hulst, *Multiple Light Scattering*, Academic Press (1980).
+- W. J. Wiscombe, "On initialization, error and flux conservation in the doubling method",
+  J. Quant. Spectrosc. Radiat. Transfer 16, 637 (1976). doi:10.1016/0022-4073(76)90056-9
+- W. J. Wiscombe, "The delta-M method", J. Atmos. Sci. 34, 1408 (1977).
+  doi:10.1175/1520-0469(1977)034<1408:TDMRYA>2.0.CO;2
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.polynomial import legendre as npleg
+
+from nmmm.errors import InvalidInputError
+from nmmm.layers.fresnel import fresnel
+from nmmm.spectra import check_finite
+
+__all__ = ["ADResult", "adding_doubling", "gauss_quadrature", "radau_quadrature"]
+
+
+# --------------------------------------------------------------------------------------
+# quadrature
+# --------------------------------------------------------------------------------------
+def gauss_quadrature(n: int, a: float = 0.0, b: float = 1.0):
+    """Gauss–Legendre nodes and weights on [a, b] (broadcasting over array a, b)."""
+    x, w = npleg.leggauss(int(n))
+    a = np.asarray(a, dtype=float)[..., None]
+    b = np.asarray(b, dtype=float)[..., None]
+    return a + (b - a) * (x + 1) / 2, (b - a) * w / 2
+
+
+def radau_quadrature(n: int, a: float = 0.0, b: float = 1.0):
+    """Gauss–Radau nodes and weights on [a, b] with the end point b a node (the last one).
+
+    Nodes on [−1, 1] with −1 fixed are −1 and the roots of (P_{n−1} + P_n)/(1 + x);
+    weights 2/n² at −1 and (1 − x)/(n P_{n−1}(x))² elsewhere (Abramowitz & Stegun 25.4.31).
+    """
+    n = int(n)
+    if n == 1:
+        x = np.array([-1.0])
+        w = np.array([2.0])
+    else:
+        c = np.zeros(n + 1)
+        c[n - 1] = 1
+        c[n] = 1
+        r = np.sort(npleg.legroots(c).real)
+        r = r[np.abs(r + 1) > 1e-10]
+        r = np.concatenate([[-1.0], r])
+        cn1 = np.zeros(n)
+        cn1[n - 1] = 1
+        P = npleg.legval(r, cn1)
+        w = np.empty(n)
+        w[0] = 2.0 / n**2
+        w[1:] = (1 - r[1:]) / (n * P[1:]) ** 2
+        x = r
+    # flip so that +1 is fixed, ascending
+    t = -x[::-1]
+    w = w[::-1]
+    a = np.asarray(a, dtype=float)[..., None]
+    b = np.asarray(b, dtype=float)[..., None]
+    return a + (b - a) * (t + 1) / 2, (b - a) * w / 2
+
+
+def _nodes(n_slab, n_ambient, N):
+    """Quadrature cosines and weights in the slab, (B, N), per element."""
+    ratio = n_ambient / n_slab
+    has_crit = ratio < 1 - 1e-12
+    nu_c = np.sqrt(np.clip(1 - ratio**2, 0, 1))
+    half = N // 2
+    g_nu, g_w = gauss_quadrature(half, 0.0, nu_c)
+    r_nu, r_w = radau_quadrature(half, nu_c, 1.0)
+    nu_split = np.concatenate([g_nu, r_nu], axis=-1)
+    w_split = np.concatenate([g_w, r_w], axis=-1)
+    f_nu, f_w = radau_quadrature(N, np.zeros_like(nu_c), np.ones_like(nu_c))
+    nu = np.where(has_crit[:, None], nu_split, f_nu)
+    w = np.where(has_crit[:, None], w_split, f_w)
+    return nu, w
+
+
+# --------------------------------------------------------------------------------------
+# slab operators
+# --------------------------------------------------------------------------------------
+def _hg_redistribution(g, nu, N):
+    """δ-M truncated HG redistribution h(ν_i, ±ν_j), (B, N, N) each, and f = g^N."""
+    f = g**N
+    P = np.stack([npleg.legval(nu, np.eye(N)[k]) for k in range(N)], axis=0)  # (N_k, B, N)
+    hp = np.zeros(nu.shape + (N,))
+    hm = np.zeros_like(hp)
+    for k in range(N):
+        chi = (2 * k + 1) * (g**k - f) / (1 - f) if k > 0 else np.ones_like(g)
+        outer = P[k][:, :, None] * P[k][:, None, :]
+        hp += chi[:, None, None] * outer
+        hm += ((-1) ** k) * chi[:, None, None] * outer
+    return hp, hm, f
+
+
+def _diamond(a, dtau, nu, w, hp, hm):
+    """Diamond-initialised thin layer (Wiscombe 1976): radiance operators R, T (B, N, N)."""
+    Bn, N = nu.shape
+    I = np.eye(N)[None]
+    Minv = (1 / nu)[:, :, None]
+    alpha = Minv * (I - (a[:, None, None] / 2) * hp * w[:, None, :])
+    beta = Minv * ((a[:, None, None] / 2) * hm * w[:, None, :])
+    A = alpha * (dtau[:, None, None] / 2)
+    B = beta * (dtau[:, None, None] / 2)
+    P = np.linalg.solve(I + A - B, I - A + B)
+    Q = np.linalg.solve(I + A + B, I - A - B)
+    return 0.5 * (P - Q), 0.5 * (P + Q)
+
+
+def _slab(a, tau, g, nu, w, N):
+    """Radiance operators (R, T) of homogeneous slabs by diamond start + doubling."""
+    hp, hm, f = _hg_redistribution(g, nu, N)
+    a_s = a * (1 - f) / (1 - a * f)
+    tau_s = tau * (1 - a * f)
+    inf = ~np.isfinite(tau_s)
+    nu_min = nu.min(axis=1)
+    start_max = nu_min / 4
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = np.where(tau_s > start_max, np.ceil(np.log2(np.where(inf, 1.0, tau_s) / start_max)), 0)
+    k = np.where(inf, 60, k).astype(int)  # up to 2^60 thin layers, stopped when T ~ 0
+    dtau = np.where(inf, start_max, tau_s / 2.0**k)
+    R, T = _diamond(a_s, dtau, nu, w, hp, hm)
+    I = np.eye(N)[None]
+    done = np.zeros(k.shape, dtype=bool)
+    for step in range(int(k.max()) if k.size else 0):
+        todo = (k > step) & ~done
+        if not np.any(todo):
+            break
+        Rt, Tt = R[todo], T[todo]
+        X = np.linalg.solve(I - Rt @ Rt, Tt)  # (I - R R)^-1 T
+        R[todo] = Rt + Tt @ Rt @ X
+        T[todo] = Tt @ X
+        # an opaque slab is finished once nothing is transmitted any more
+        done[todo] = inf[todo] & (np.abs(T[todo]).max(axis=(1, 2)) < 1e-15)
+    return R, T
+
+
+# --------------------------------------------------------------------------------------
+# public
+# --------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ADResult:
+    """Adding–doubling fluxes (fractions of the incident power).
+
+    reflectance : collimated normal incidence, total hemispherical, specular included.
+    specular_reflectance : the top surface's specular part of it (Fresnel at normal incidence).
+    transmittance : collimated normal incidence, total into the medium below (0 on a substrate).
+    diffuse_reflectance, diffuse_transmittance : Lambertian incidence.
+    """
+
+    reflectance: np.ndarray
+    specular_reflectance: np.ndarray
+    transmittance: np.ndarray
+    diffuse_reflectance: np.ndarray
+    diffuse_transmittance: np.ndarray
+
+    @property
+    def body_reflectance(self) -> np.ndarray:
+        """Reflectance with the specular component excluded (SCE)."""
+        return self.reflectance - self.specular_reflectance
+
+
+def _real_index(x, name):
+    a = check_finite(x, name)
+    if np.iscomplexobj(a):
+        if np.any(a.imag != 0):
+            raise InvalidInputError(f"{name} must be a real index here (account for absorption through the albedo)")
+        a = a.real
+    a = a.astype(float)
+    if np.any(a <= 0):
+        raise InvalidInputError(f"{name} must be > 0")
+    return a
+
+
+def adding_doubling(
+    albedo,
+    optical_thickness,
+    g,
+    n_slab=1.0,
+    n_ambient=1.0,
+    n_below=None,
+    substrate_reflectance=None,
+    clear_coat_optical_thickness=0.0,
+    quad_pts: int = 16,
+) -> ADResult:
+    """Reflectance and transmittance of a scattering slab by adding–doubling.
+
+    Parameters
+    ----------
+    albedo : array_like
+        Single-scattering albedo μ_s/(μ_a + μ_s), in [0, 1].
+    optical_thickness : array_like
+        (μ_a + μ_s)·thickness, ≥ 0; ``np.inf`` for an opaque (semi-infinite) slab.
+    g : array_like
+        Henyey–Greenstein asymmetry parameter in (−1, 1) (e.g. the Mie g).
+    n_slab : array_like
+        Real index of the slab (the binder).
+    n_ambient : float
+        Index above the slab (air).
+    n_below : array_like, optional
+        Index of the medium below (default: ``n_ambient``); ignored with a substrate.
+    substrate_reflectance : array_like, optional
+        A Lambertian substrate in optical contact under the slab, with this reflectance
+        (as seen from inside the slab). Then ``transmittance`` is 0.
+    clear_coat_optical_thickness : array_like
+        Absorption optical thickness (normal direction) of a non-scattering layer of the
+        same index between the ambient and the slab (clear coat in optical contact).
+    quad_pts : int
+        Quadrature points per hemisphere (even; 16 is accurate to ~1e-4 for g ≤ 0.9).
+
+    Returns
+    -------
+    ADResult
+
+    Notes
+    -----
+    The series of boundary, clear coat, slab and bottom is combined with the adding
+    equations (module docstring). Energy is conserved to rounding for albedo 1.
+    """
+    N = int(quad_pts)
+    if N < 2 or N % 2:
+        raise InvalidInputError("quad_pts must be an even integer >= 2")
+    a = check_finite(albedo, "albedo").astype(float)
+    if np.any((a < 0) | (a > 1)):
+        raise InvalidInputError("albedo must lie in [0, 1]")
+    tau = np.asarray(optical_thickness, dtype=float)
+    if np.any(np.isnan(tau)) or np.any(tau < 0):
+        raise InvalidInputError("optical_thickness must be >= 0 (np.inf for an opaque slab)")
+    gg = check_finite(g, "g").astype(float)
+    if np.any((gg <= -1) | (gg >= 1)):
+        raise InvalidInputError("g must lie in (-1, 1)")
+    ns = _real_index(n_slab, "n_slab")
+    n0 = float(_real_index(n_ambient, "n_ambient"))
+    if np.any(ns < n0):
+        raise InvalidInputError("n_slab must be >= n_ambient (the quadrature assumes a denser slab)")
+    nb = _real_index(n0 if n_below is None else n_below, "n_below")
+    tcc = np.asarray(clear_coat_optical_thickness, dtype=float)
+    if np.any(~np.isfinite(tcc)) or np.any(tcc < 0):
+        raise InvalidInputError("clear_coat_optical_thickness must be finite and >= 0")
+    use_sub = substrate_reflectance is not None
+    rho = check_finite(0.0 if not use_sub else substrate_reflectance, "substrate_reflectance").astype(float)
+    if np.any((rho < 0) | (rho > 1)):
+        raise InvalidInputError("substrate_reflectance must lie in [0, 1]")
+
+    shape = np.broadcast_shapes(a.shape, tau.shape, gg.shape, ns.shape, nb.shape, tcc.shape, rho.shape)
+    a, tau, gg, ns, nb, tcc, rho = (np.broadcast_to(v, shape).ravel() for v in (a, tau, gg, ns, nb, tcc, rho))
+    Bn = a.size
+
+    nu, w = _nodes(ns, n0, N)
+    c = 2 * nu * w  # flux weights
+    ang = np.degrees(np.arccos(np.clip(nu, 0, 1)))
+    I = np.eye(N)[None]
+
+    Rs, Ts = _slab(a, tau, gg, nu, w, N)
+
+    # bottom boundary: Lambertian substrate (R_ij = rho c_j) or Fresnel interface
+    if use_sub:
+        Rb = rho[:, None, None] * np.broadcast_to(c[:, None, :], (Bn, N, N))
+        tb = np.zeros((Bn, N))
+    else:
+        rbd = fresnel(ns[:, None], nb[:, None], ang).R  # TIR -> 1
+        Rb = rbd[:, :, None] * I
+        tb = 1 - rbd
+    X = np.linalg.solve(I - Rs @ Rb, Ts)  # (I - Rs Rb)^-1 Ts
+    Rcomp = Rs + Ts @ Rb @ X
+    # clear coat: diagonal attenuation both ways
+    att = np.exp(-tcc[:, None] / nu)
+    Rbody = att[:, :, None] * Rcomp * att[:, None, :]
+
+    # top interface, light from inside
+    rint = fresnel(ns[:, None], n0, ang).R
+    Rint = rint[:, :, None] * I
+    M = I - Rbody @ Rint
+
+    # sources: collimated normal incidence (node N-1 is nu = 1) and diffuse incidence
+    spec = fresnel(n0, ns, 0.0).R
+    d_col = np.zeros((Bn, N))
+    d_col[:, -1] = (1 - spec) / c[:, -1]
+    d_dif = (ns[:, None] / n0) ** 2 * (1 - rint)
+    S = np.stack([d_col, d_dif], axis=-1)  # (B, N, 2)
+    u = np.linalg.solve(M, Rbody @ S)  # up radiance under the surface
+    out_up = np.einsum("bn,bnk->bk", c * (1 - rint), u)
+    # down radiance at the top of the slab, then at its bottom
+    dtop = att[:, :, None] * (S + Rint @ u)
+    wdown = np.linalg.solve(I - Rs @ Rb, Ts @ dtop)
+    out_down = np.einsum("bn,bnk->bk", c * tb, wdown)
+
+    r_e = 1 - np.einsum("bn,bn->b", c, d_dif)  # external diffuse Fresnel reflectance
+    R = spec + out_up[:, 0]
+    Rd = r_e + out_up[:, 1]
+    res = ADResult(
+        reflectance=R.reshape(shape),
+        specular_reflectance=spec.reshape(shape),
+        transmittance=out_down[:, 0].reshape(shape),
+        diffuse_reflectance=Rd.reshape(shape),
+        diffuse_transmittance=out_down[:, 1].reshape(shape),
+    )
+    return res
