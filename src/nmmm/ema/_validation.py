@@ -61,3 +61,14 @@ def check_orientation(orientation: str) -> str:
     if orientation not in ("aligned", "random"):
         raise InvalidInputError(f"orientation must be 'aligned' or 'random', got {orientation!r}")
     return orientation
+
+
+def passive(eps) -> np.ndarray:
+    """Clear the round-off Im ε < 0 (~1e-16) that mixing formulas can leave on lossless
+    inputs: with passive phases (checked on input) the exact result is passive (Milton 1981),
+    so a negative imaginary part can only be round-off."""
+    e = np.asarray(eps, dtype=complex)
+    neg = e.imag < 0
+    if np.any(neg):
+        e = np.where(neg, e.real + 0j, e)
+    return e

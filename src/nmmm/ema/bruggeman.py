@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nmmm.ema._validation import as_eps, as_fraction
+from nmmm.ema._validation import as_eps, as_fraction, passive
 from nmmm.errors import InvalidInputError
 
 #: Relative loss added to every phase to select the physical root.
@@ -160,8 +160,7 @@ def bruggeman(eps_phases, fractions, fraction=None) -> np.ndarray:
     roots = _roots(e, f)
     nearest = np.argmin(np.abs(roots - pick), axis=-1)[..., None]
     out = np.take_along_axis(roots, nearest, axis=-1)[..., 0]
-    # round-off may leave −1e-17 on lossless media
-    return np.where(out.imag < 0, out.real + 0j, out)
+    return passive(out)
 
 
 __all__ = ["bruggeman", "bruggeman_residual"]

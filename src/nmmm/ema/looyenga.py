@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nmmm.ema._validation import as_eps, as_fraction
+from nmmm.ema._validation import as_eps, as_fraction, passive
 from nmmm.errors import InvalidInputError
 
 
@@ -48,7 +48,7 @@ def looyenga(eps_phases, fractions, fraction=None) -> np.ndarray:
         acc = acc + f * np.power(e, 1 / 3)
     if np.any(np.abs(np.asarray(total) - 1) > 1e-6):
         raise InvalidInputError("Looyenga fractions must sum to 1 (list every phase)")
-    return acc**3
+    return passive(acc**3)
 
 
 __all__ = ["looyenga"]

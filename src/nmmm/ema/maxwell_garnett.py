@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nmmm.ema._validation import as_depolarization, as_eps, as_fraction, check_orientation
+from nmmm.ema._validation import as_depolarization, as_eps, as_fraction, check_orientation, passive
 from nmmm.errors import InvalidInputError
 
 
@@ -71,7 +71,7 @@ def maxwell_garnett(eps_inclusion, eps_host, fraction) -> np.ndarray:
     ei = as_eps(eps_inclusion, "eps_inclusion")
     em = as_eps(eps_host, "eps_host")
     p = as_fraction(fraction)
-    return em * ((1 + 2 * p) * ei + 2 * (1 - p) * em) / ((1 - p) * ei + (2 + p) * em)
+    return passive(em * ((1 + 2 * p) * ei + 2 * (1 - p) * em) / ((1 - p) * ei + (2 + p) * em))
 
 
 def maxwell_garnett_polarizability(eps_host, fraction, polarizability) -> np.ndarray:
@@ -88,7 +88,7 @@ def maxwell_garnett_polarizability(eps_host, fraction, polarizability) -> np.nda
     a = np.asarray(polarizability, dtype=complex)
     if not np.all(np.isfinite(a)):
         raise InvalidInputError("polarizability contains NaN or infinite values")
-    return em * (1 + 2 * p * a / 3) / (1 - p * a / 3)
+    return passive(em * (1 + 2 * p * a / 3) / (1 - p * a / 3))
 
 
 def _combine(em, terms, orientation):
@@ -103,8 +103,8 @@ def _combine(em, terms, orientation):
         num = num + p[..., None] * alpha
         den = den + p[..., None] * L * alpha
     if orientation == "aligned":
-        return em[..., None] * (1 + num / (1 - den))  # ε_m + ε_m Σ p α / (1 − Σ p L α)
-    return em * (1 + num.mean(-1) / (1 - den.mean(-1)))
+        return passive(em[..., None] * (1 + num / (1 - den)))  # ε_m + ε_m Σ p α / (1 − Σ p L α)
+    return passive(em * (1 + num.mean(-1) / (1 - den.mean(-1))))
 
 
 def maxwell_garnett_ellipsoid(eps_inclusion, eps_host, fraction, depolarization,

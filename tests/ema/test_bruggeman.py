@@ -1,0 +1,168 @@
+"""Bruggeman: limits, symmetry, root selection, n phases, agreement with MG and pyElli."""
+
+import numpy as np
+import pytest
+
+from nmmm.ema import bergman_milton_bounds, bruggeman, bruggeman_residual, maxwell_garnett
+from nmmm.errors import InvalidInputError
+
+from .conftest import random_eps
+
+
+def test_limits():
+    rng = np.random.default_rng(10)
+    ea, eb = random_eps(rng, 40), random_eps(rng, 40)
+    np.testing.assert_allclose(bruggeman(ea, eb, 0.0), eb, rtol=1e-10)
+    np.testing.assert_allclose(bruggeman(ea, eb, 1.0), ea, rtol=1e-10)
+    np.testing.assert_allclose(bruggeman(ea, ea, rng.uniform(0, 1, 40)), ea, rtol=1e-10)
+
+
+def test_symmetric_under_phase_exchange():
+    rng = np.random.default_rng(11)
+    ea, eb, f = random_eps(rng, 500), random_eps(rng, 500), rng.uniform(0, 1, 500)
+    np.testing.assert_allclose(bruggeman(ea, eb, f), bruggeman(eb, ea, 1 - f), rtol=1e-9)
+    np.testing.assert_allclose(bruggeman([ea, eb], [f, 1 - f]), bruggeman([eb, ea], [1 - f, f]), rtol=1e-9)
+
+
+def test_closed_form_real_phases():
+    """Two real phases: the positive root of 2ε² − bε − ε_a ε_b = 0,
+    b = (3f − 1) ε_a + (2 − 3f) ε_b (Bruggeman 1935), between the phases."""
+    ea, eb = 12.0, 1.7
+    f = np.linspace(0, 1, 101)
+    b = (3 * f - 1) * ea + (2 - 3 * f) * eb
+    ref = (b + np.sqrt(b * b + 8 * ea * eb)) / 4
+    out = bruggeman(ea, eb, f)
+    np.testing.assert_allclose(out.real, ref, rtol=1e-12)
+    assert np.all(out.imag == 0)
+
+
+def test_agrees_with_maxwell_garnett_to_first_order_in_p():
+    """Both are eps_m (1 + 3 p beta) + O(p²); their difference divided by p vanishes as p -> 0."""
+    rng = np.random.default_rng(12)
+    ea, eb = random_eps(rng, 100), random_eps(rng, 100)
+    beta = (ea - eb) / (ea + 2 * eb)
+    p = np.array([1e-3, 1e-4, 1e-5])[:, None]
+    d = np.abs(bruggeman(ea, eb, p) - maxwell_garnett(ea, eb, p)) / np.abs(3 * eb * beta)
+    ratio = d / p  # O(p): shrinks tenfold per decade
+    assert np.all(ratio[2] < ratio[0] / 50)
+    assert np.all(ratio[2] < 1e-3 * 10 * np.abs(ea / eb + 2) ** 0)  # loose absolute check
+
+
+def test_exactly_one_root_in_the_upper_half_plane_and_residual():
+    """The premise of the root choice (Milton 1981): for lossy phases one root of the Bruggeman
+    polynomial has Im > 0; the returned one satisfies the equation."""
+    rng = np.random.default_rng(13)
+    for n in (2, 3, 4):
+        eps = [random_eps(rng, 2000) for _ in range(n)]
+        fr = list(rng.dirichlet(np.ones(n), 2000).T)
+        out = bruggeman(eps, fr)
+        assert np.all(out.imag > 0)
+        res = bruggeman_residual(out, eps, fr)
+        assert np.max(np.abs(res)) < 1e-9
+        # numpy's own root finder on the same polynomial, one root at a time (independent)
+        from numpy.polynomial import polynomial as P
+
+        for s in range(0, 2000, 200):
+            poly = np.zeros(1, complex)
+            for i in range(n):
+                term = np.array([fr[i][s] * eps[i][s], -fr[i][s]])
+                for j in range(n):
+                    if j != i:
+                        term = P.polymul(term, [eps[j][s], 2])
+                poly = P.polyadd(poly, term)
+            roots = P.polyroots(poly)
+            assert np.sum(roots.imag > 1e-9 * np.abs(roots)) == 1
+            np.testing.assert_allclose(out[s], roots[np.argmax(roots.imag)], rtol=1e-8)
+
+
+def test_inside_hashin_shtrikman_region():
+    """Bruggeman describes a realizable isotropic composite, so it must lie in the
+    Bergman–Milton (complex Hashin–Shtrikman) region."""
+    rng = np.random.default_rng(14)
+    ea, eb, f = random_eps(rng, 300), random_eps(rng, 300), rng.uniform(0.01, 0.99, 300)
+    region = bergman_milton_bounds(ea, eb, f, kind="hashin_shtrikman", n_points=801)
+    assert np.all(region.contains(bruggeman(ea, eb, f), rtol=1e-6))
+
+
+def _drude_silver_like(w):
+    """ε = 1 − ωp²/(ω² + iγω), ħωp = 9 eV, ħγ = 0.07 eV (an analytic, causal metal)."""
+    E = 1239.841984 / w
+    return 1 - 9.0**2 / (E**2 + 1j * 0.07 * E)
+
+
+def test_root_continuous_in_wavelength_where_the_textbook_root_fails():
+    """A Drude metal in glass over 200–2000 nm: the chosen root is passive, smooth in wavelength
+    and solves the equation, whereas the textbook '+ sqrt' (principal branch) root of the
+    quadratic lands on the gain branch (Im ε < 0) over much of the range."""
+    w = np.arange(200.0, 2001.0, 1.0)
+    em = _drude_silver_like(w)
+    for f in (0.1, 0.2, 0.33, 0.5, 0.7):
+        out = bruggeman(em, 2.25, f)
+        assert np.all(out.imag >= 0)
+        assert np.max(np.abs(np.diff(out)) / np.abs(out[1:])) < 0.1  # a branch jump is O(1)
+        assert np.max(np.abs(bruggeman_residual(out, [em, 2.25], [f, 1 - f]))) < 1e-10
+        b = (3 * f - 1) * em + (2 - 3 * f) * 2.25
+        naive = (b + np.sqrt(b * b + 8 * em * 2.25)) / 4
+        if f != 0.33:
+            assert np.sum(naive.imag < 0) > 100
+
+
+def test_pyelli_bruggeman_agrees_on_drude_metal():
+    elli = pytest.importorskip("elli")
+    w = np.arange(200.0, 2001.0, 1.0)
+    em = _drude_silver_like(w)
+    host = elli.IsotropicMaterial(elli.TableEpsilon(lbda=w, epsilon=np.full(w.size, 2.25 + 0j)))
+    guest = elli.IsotropicMaterial(elli.TableEpsilon(lbda=w, epsilon=em))
+    for f in (0.1, 0.5, 0.7):
+        ref = elli.BruggemanEMA(host, guest, f).get_tensor(w)[:, 0, 0]
+        np.testing.assert_allclose(bruggeman(em, 2.25, f), ref, rtol=1e-9)
+
+
+def test_continuous_in_wavelength_with_gold(gold_silica):
+    w, _, _, ea, es = gold_silica
+    for f in (0.2, 0.33, 0.4, 0.6):
+        out = bruggeman(ea, es, f)
+        assert np.all(out.imag >= 0)
+        assert np.max(np.abs(np.diff(out)) / np.abs(out[1:])) < 0.05
+
+
+def test_pyelli_bruggeman_agrees(gold_silica):
+    elli = pytest.importorskip("elli")
+    w, _, _, ea, es = gold_silica
+    host = elli.IsotropicMaterial(elli.TableEpsilon(lbda=w, epsilon=es))
+    guest = elli.IsotropicMaterial(elli.TableEpsilon(lbda=w, epsilon=ea))
+    for f in (0.0005, 0.1, 0.33, 0.5, 0.9):
+        ref = elli.BruggemanEMA(host, guest, f).get_tensor(w)[:, 0, 0]
+        np.testing.assert_allclose(bruggeman(ea, es, f), ref, rtol=1e-9)
+
+
+def test_three_phases_with_a_repeated_phase_is_two_phase():
+    rng = np.random.default_rng(15)
+    ea, eb = random_eps(rng, 100), random_eps(rng, 100)
+    f = rng.uniform(0, 1, 100)
+    three = bruggeman([ea, ea, eb], [f / 2, f / 2, 1 - f])
+    np.testing.assert_allclose(three, bruggeman(ea, eb, f), rtol=1e-8)
+
+
+def test_lossless_metal_limiting_absorption():
+    """Real negative metal ε with a dielectric: the result is the Im >= 0 root, equal to the
+    limit of a slightly lossy metal."""
+    f = np.linspace(0, 1, 201)
+    lossless = bruggeman(-10.0 + 0j, 2.25, f)
+    lossy = bruggeman(-10.0 + 1e-6j, 2.25, f)
+    assert np.all(lossless.imag >= 0)
+    np.testing.assert_allclose(lossless, lossy, atol=1e-4)
+
+
+def test_broadcast_and_bad_input(gold_silica):
+    w, _, _, ea, es = gold_silica
+    out = bruggeman(ea[:401, None], es[:401, None], np.linspace(0, 1, 1000))
+    assert out.shape == (401, 1000) and np.all(out.imag >= 0)
+    with pytest.raises(InvalidInputError, match="sum to 1"):
+        bruggeman([1.0, 2.0], [0.3, 0.3])
+    with pytest.raises(InvalidInputError, match="one fraction per phase"):
+        bruggeman([1.0, 2.0], [1.0])
+    with pytest.raises(InvalidInputError):
+        bruggeman(1.0, 2.0, 1.5)
+    with pytest.raises(InvalidInputError):
+        bruggeman([1.0, np.nan], [0.5, 0.5])
