@@ -53,9 +53,9 @@ def main(argv=None):
     print(f"10-layer stack x {wl.size} wavelengths x {ang.size} angles = {npts} points, s and p")
 
     # nmmm: warm-up (Numba compile / cache load), then best of --repeat
-    stack.rt(wl[:3], ang[:2])
+    stack.rt(wl[:3], ang[:2], method="numba")
     stack.rt(wl[:3], ang[:2], method="numpy")
-    t_nb, res = best_of(lambda: stack.rt(wl, ang), args.repeat)
+    t_nb, res = best_of(lambda: stack.rt(wl, ang, method="numba"), args.repeat)
     t_np, res_np = best_of(lambda: stack.rt(wl, ang, method="numpy"), args.repeat)
     print(f"nmmm Stack.rt (numba)     {t_nb * 1e3:9.1f} ms")
     print(f"nmmm Stack.rt (numpy)     {t_np * 1e3:9.1f} ms   max|r_numba - r_numpy| = "

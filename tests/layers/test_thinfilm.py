@@ -171,3 +171,39 @@ def test_layer_object_and_repr():
     assert "incoherent" in repr(st)
     st2 = st.with_thicknesses([120.0, 2e5])
     assert float(st2.layers[0].thickness_nm) == 120.0
+
+
+@pytest.mark.parametrize("method", ["numba", "numpy"])
+def test_frustrated_total_internal_reflection_against_tmm(method):
+    # glass | thin air gap | glass beyond the critical angle: evanescent field in the gap
+    n_list, ang = [1.5, 1.0, 1.5 + 0.001j], np.array([45.0, 60.0, 75.0])
+    for gap in (50.0, 300.0, 2000.0):
+        res = Stack([(1.0, gap)], ambient=1.5, substrate=n_list[2]).rt(WL, ang, method=method)
+        for i, w in enumerate(WL):
+            for j, a in enumerate(ang):
+                for pol in "sp":
+                    ref = tmm.coh_tmm(pol, n_list, [np.inf, gap, np.inf], np.radians(a), w)
+                    assert getattr(res, "r" + pol)[i, j] == pytest.approx(ref["r"], abs=1e-12)
+                    assert getattr(res, "T" + pol)[i, j] == pytest.approx(ref["T"], abs=1e-12)
+
+
+def test_absorbing_ambient_normal_incidence_against_tmm():
+    # tmm accepts an absorbing incidence medium only where n0 sin(theta0) is real
+    n_list = [1.4 + 0.05j, 2.0 + 0.2j, 1.5]
+    res = Stack([(n_list[1], 70.0)], ambient=n_list[0], substrate=n_list[2]).rt(WL, 0.0)
+    for i, w in enumerate(WL):
+        for pol in "sp":
+            ref = tmm.coh_tmm(pol, n_list, [np.inf, 70.0, np.inf], 0.0, w)
+            assert getattr(res, "r" + pol)[i] == pytest.approx(ref["r"], abs=1e-12)
+            assert getattr(res, "R" + pol)[i] == pytest.approx(ref["R"], abs=1e-12)
+            assert getattr(res, "T" + pol)[i] == pytest.approx(ref["T"], abs=1e-12)
+
+
+def test_numba_and_numpy_kernels_agree_on_thickness_grid():
+    d = np.linspace(10.0, 400.0, 9)
+    st = Stack([(2.2 + 0.3j, d[:, None]), (1.46, 120.0), (0.2 + 3.0j, np.array([5.0, 20.0]))], substrate=1.52)
+    a = st.rt(WL, ANG, method="numba")
+    b = st.rt(WL, ANG, method="numpy")
+    assert a.rs.shape == (9, 2, 5, 5)
+    for x in ("rs", "rp", "ts", "tp", "Rs", "Rp", "Ts", "Tp"):
+        np.testing.assert_allclose(getattr(a, x), getattr(b, x), atol=1e-13)

@@ -69,7 +69,10 @@ from nmmm.errors import InvalidInputError
 from nmmm.layers.fresnel import check_angle_deg, n_cos_theta
 from nmmm.spectra import as_wavelength_nm, check_finite, check_nk, check_positive
 
-__all__ = ["Layer", "Stack", "StackResult", "coherent_rt"]
+__all__ = ["Layer", "Stack", "StackResult", "coherent_rt", "NUMBA_MIN_POINTS"]
+
+#: result size (points) from which ``Stack.rt(method="auto")`` uses the Numba kernel
+NUMBA_MIN_POINTS = 2048
 
 
 # ----------------------------------------------------------------------------------------
@@ -316,7 +319,7 @@ class Stack:
         *,
         grid: bool = True,
         layer_absorption: bool = False,
-        method: str = "numba",
+        method: str = "auto",
     ) -> StackResult:
         """Reflectance, transmittance and (coherent stacks) amplitude coefficients.
 
@@ -333,17 +336,19 @@ class Stack:
         layer_absorption : bool
             Also compute the absorbed fraction in each layer (``absorbed_s``,
             ``absorbed_p``, ``absorbed``).
-        method : {'numba', 'numpy'}
+        method : {'auto', 'numba', 'numpy'}
             Kernel for fully coherent stacks without per-layer absorption: a compiled
-            Numba loop over points (default, fastest) or batched NumPy arithmetic (used
-            in every other case). Both give the same numbers to rounding.
+            Numba loop over points (fastest on large grids) or batched NumPy arithmetic
+            (used in every other case). ``'auto'`` takes Numba from
+            :data:`NUMBA_MIN_POINTS` result points up, so that small calls do not pay for
+            loading the compiled kernel. Both give the same numbers to rounding.
 
         Returns
         -------
         StackResult
         """
-        if method not in ("numba", "numpy"):
-            raise InvalidInputError(f"method must be 'numba' or 'numpy', got {method!r}")
+        if method not in ("auto", "numba", "numpy"):
+            raise InvalidInputError(f"method must be 'auto', 'numba' or 'numpy', got {method!r}")
         w = as_wavelength_nm(wavelength_nm)
         a = check_angle_deg(angle_deg)
         if grid:
@@ -373,6 +378,8 @@ class Stack:
 
         theta = np.radians(a_g)
         coh = [layer.coherent for layer in self.layers]
+        if method == "auto":
+            method = "numba" if np.prod(shape, dtype=np.int64) >= NUMBA_MIN_POINTS else "numpy"
         if all(coh) and not layer_absorption and method == "numba":
             return _rt_numba(w, a, n_amb, n_lay, n_sub, d_lay, theta, w_g, shape)
 
