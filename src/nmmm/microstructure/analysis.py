@@ -228,38 +228,75 @@ def covariance_profile(binary, pixel_nm=1.0, periodic: bool = True, max_lag_nm: 
     return np.arange(nb)[ok] * step, sums[ok] / cnt[ok]
 
 
-def integral_range(binary, pixel_nm=1.0, periodic: bool = True, extent: float = 0.5) -> float:
+def integral_range(binary, pixel_nm=1.0, periodic: bool = True, extent: float | None = None) -> float:
     """Integral range A = ∫ (C(h) − p²) dh / (p(1 − p)) (nm^d).
 
-    The integral runs over the centred box of lags |h_i| ≤ extent · L_i / 2 (default: half
-    the cell per axis, |h_i| ≤ L_i / 4). For a periodic cell the sum over all lags vanishes
-    identically, so the whole cell must not be used; choose a cell several times larger
-    than the correlation length so that C(h) = p² beyond the box. The variance of the
+    The integral runs over the centred box of lags |h_i| ≤ extent · L_i / 2, at most half
+    the cell per axis (extent = 0.5, |h_i| ≤ L_i / 4): for a periodic cell the sum over all
+    lags vanishes identically, so the whole cell must not be used. By default (``extent=None``)
+    the box is cut to 4 correlation lengths (the first lag where C(h) − p² falls below 2 %
+    of p(1 − p)) when that is smaller than half the cell: beyond, C(h) = p² and summing
+    noise only adds variance (std ≈ 120 % instead of 13 % for Boolean discs of radius
+    5 px in 512² cells). The variance of the
     fraction over a domain V ≫ A is p(1 − p) A / V (Lantuéjoul 1991).
 
     Bias correction: with the sample fraction p̂ in place of p, E[Ĉ(h) − p̂²] ≈
     C(h) − p² − Var(p̂) and Var(p̂) ≈ p(1 − p) A / |V|, so the sum over the box B of lags
     estimates A (1 − |B|/|V|); the result is divided by that factor (0.75 in 2-D and
     0.875 in 3-D for the default box). The periodic identity (sum over the whole cell = 0)
-    is the case |B| = |V|.
+    is the case |B| = |V|. For a non-periodic window the covariance at lag h is centred
+    by the means over the N(h) overlapping pairs and the factor is 1 − Σ_{h∈B} 1/N(h).
     """
     b = _as_binary(binary)
-    if not 0 < extent <= 1:
-        raise InvalidInputError(f"extent must lie in (0, 1] (fraction of the cell), got {extent}")
-    if periodic and extent >= 1:
-        raise InvalidInputError("over the whole periodic cell the integral is exactly zero; use extent < 1")
+    if extent is not None and not 0 < extent <= 0.5:
+        raise InvalidInputError(
+            f"extent must lie in (0, 0.5] (fraction of the cell edge spanned by the lags |h_i| <= extent L_i / 2); "
+            f"got {extent}; over the whole periodic cell the integral is exactly zero"
+        )
     v = as_voxel_nm(pixel_nm, b.ndim)
     p = float(b.mean())
     if not 0 < p < 1:
         raise InvalidInputError(f"integral range needs both phases present, got fraction {p}")
-    c = covariance(b, periodic)
-    _, mesh = _lag_grid(c.shape, v)
-    mask = np.ones(c.shape, bool)
-    for m, n, x in zip(mesh, b.shape, v):
-        mask &= np.abs(m) <= extent * n * x / 2 + 1e-9
-    raw = float((c[mask] - p * p).sum() * np.prod(v) / (p * (1 - p)))
-    box_over_cell = float(mask.sum()) / b.size
-    return raw / (1.0 - box_over_cell)
+    if periodic:
+        k = covariance(b, True) - p * p
+        npairs = np.full(k.shape, float(b.size))
+    else:
+        k, npairs = _centred_covariance_window(b)
+    r, mesh = _lag_grid(k.shape, v)
+    half = [0.25 * n * x for n, x in zip(b.shape, v)]
+    if extent is None:
+        step = min(v)
+        idx = np.rint(r / step).astype(np.int64)
+        prof = np.bincount(idx.ravel(), k.ravel()) / np.maximum(np.bincount(idx.ravel()), 1)
+        below = np.flatnonzero(prof <= 0.02 * p * (1 - p))
+        if below.size:
+            half = [min(hh, 4 * below[0] * step) for hh in half]
+    else:
+        half = [extent * n * x / 2 for n, x in zip(b.shape, v)]
+    mask = np.ones(k.shape, bool)
+    for m, hh in zip(mesh, half):
+        mask &= np.abs(m) <= hh + 1e-9
+    raw = float(k[mask].sum() * np.prod(v) / (p * (1 - p)))
+    return raw / (1.0 - float(np.sum(1.0 / npairs[mask])))
+
+
+def _centred_covariance_window(b):
+    """Centred covariance of a finite window: for each lag, the mean of I(x)I(x+h) over the
+    N(h) pairs inside the window minus the product of the two local means."""
+    x = b.astype(float)
+    s = [2 * n for n in x.shape]
+    fi = np.fft.rfftn(x, s)
+    fw = np.fft.rfftn(np.ones_like(x), s)
+
+    def corr(f, g):
+        return np.fft.irfftn(f * np.conj(g), s)
+
+    n = np.maximum(np.round(corr(fw, fw)), 1)
+    c2 = corr(fi, fi) / n
+    m1 = corr(fi, fw) / n
+    m2 = corr(fw, fi) / n
+    sl = tuple(slice(1, 2 * m) for m in x.shape)
+    return np.fft.fftshift(c2 - m1 * m2)[sl], np.fft.fftshift(n)[sl]
 
 
 def _edt(b, v, periodic):
