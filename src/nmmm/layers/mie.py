@@ -552,10 +552,10 @@ def mie(n_particle, n_medium, diameter_nm, wavelength_nm, angles_deg=None) -> Mi
 
     Examples
     --------
-    Bohren & Huffman's BHMIE test case (appendix A, p. 482: m = 1.55, x = 3.14159 in a host of
-    index 1): Q_ext = 3.10543, Q_back = 2.92534.
+    Bohren & Huffman's BHMIE listing (appendix A, p. 482): m = 1.55, radius 0.525 µm,
+    λ = 0.6328 µm in vacuum gives Q_ext = 3.10543, Q_back = 2.92534.
 
-    >>> r = mie(1.55, 1.0, 1000.0, 1000.0)
+    >>> r = mie(1.55, 1.0, 1050.0, 632.8)
     >>> print(f"{float(r.qext):.5f} {float(r.qback):.5f}")
     3.10543 2.92534
     """

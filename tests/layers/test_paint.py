@@ -1,0 +1,108 @@
+"""The paint-film chain (Mie -> transport coefficients -> KM / adding-doubling) against
+miepython + iadpython + the closed-form KM/Saunderson result, run on the same inputs."""
+
+import numpy as np
+import pytest
+
+from nmmm.errors import InvalidInputError
+from nmmm.layers.distributions import monodisperse
+from nmmm.layers.kubelka_munk import km_r_infinity
+from nmmm.layers.paint import PaintFilm, compare_km_ad, film_coefficients, paint_reflectance
+
+miepython = pytest.importorskip("miepython")
+iad = pytest.importorskip("iadpython")
+
+W = np.array([450.0, 550.0, 650.0])
+PIG = 2.6 + 0.05j
+N_B = 1.5
+D = 300.0
+
+
+def _mie_coefficients(f, k_binder=0.0):
+    qext, qsca, qback, g = miepython.efficiencies(np.full(W.size, PIG), np.full(W.size, D), W, n_env=N_B)
+    mu_s = f * 1.5 * qsca / D
+    mu_a = f * 1.5 * (qext - qsca) / D + (1 - f) * 4 * np.pi * k_binder / W
+    return mu_a, mu_s, g
+
+
+def test_film_coefficients_against_miepython():
+    film = PaintFilm(PIG, N_B + 1e-6j, monodisperse(D), 0.08, 20e3)
+    co = film_coefficients(film, W)
+    mu_a, mu_s, g = _mie_coefficients(0.08, 1e-6)
+    np.testing.assert_allclose(co.mu_a_per_nm, mu_a, rtol=1e-9)
+    np.testing.assert_allclose(co.mu_s_per_nm, mu_s, rtol=1e-9)
+    np.testing.assert_allclose(co.g, g, rtol=1e-9)
+
+
+def test_opaque_film_adding_doubling_against_iadpython():
+    film = PaintFilm(PIG, N_B, monodisperse(D), 0.08, np.inf)
+    R = paint_reflectance(film, W, solver="ad", quad_pts=16).reflectance
+    mu_a, mu_s, g = _mie_coefficients(0.08)
+    ref = []
+    for i in range(W.size):
+        s = iad.Sample(a=mu_s[i] / (mu_a[i] + mu_s[i]), b=1e5, g=g[i], n=N_B, n_above=N_B, n_below=N_B, quad_pts=16)
+        ref.append(s.rt()[0])
+    np.testing.assert_allclose(R, ref, atol=3e-5)
+
+
+def test_opaque_film_kubelka_munk_is_saunderson_of_r_infinity():
+    film = PaintFilm(PIG, N_B, monodisperse(D), 0.08, np.inf)
+    R = paint_reflectance(film, W, solver="km").reflectance
+    mu_a, mu_s, g = _mie_coefficients(0.08)
+    Rinf = km_r_infinity(2 * mu_a / (0.75 * mu_s * (1 - g)))
+    k1, k2 = 0.04, 0.5963  # Fresnel at normal incidence; Judd (1942) internal diffuse reflectance, n = 1.5
+    np.testing.assert_allclose(R, k1 + (1 - k1) * (1 - k2) * Rinf / (1 - k2 * Rinf), atol=2e-4)
+
+
+def test_lossless_film_on_white_substrate_reflects_everything():
+    film = PaintFilm(1.9 + 0j, N_B, monodisperse(250.0), 0.1, 5e3, substrate_reflectance=1.0, clear_coat_thickness_nm=1e4)
+    for solver in ("km", "ad"):
+        np.testing.assert_allclose(paint_reflectance(film, W, solver=solver).reflectance, 1.0, atol=1e-9)
+
+
+def test_hiding_and_comparison():
+    thin = dict(pigment=PIG, binder=N_B, distribution=monodisperse(D), volume_fraction=0.02, thickness_nm=2e3)
+    white = paint_reflectance(PaintFilm(**thin, substrate_reflectance=0.8), W, "ad").reflectance
+    black = paint_reflectance(PaintFilm(**thin, substrate_reflectance=0.0), W, "ad").reflectance
+    assert np.all(white > black)  # a thin film does not hide its substrate
+    c = compare_km_ad(PaintFilm(**thin, substrate_reflectance=0.8), W)
+    assert c["max_abs_difference"] == pytest.approx(np.max(np.abs(c["km"] - c["ad"])))
+    assert c["delta_e2000"] >= 0
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(volume_fraction=1.5),
+        dict(volume_fraction=-0.1),
+        dict(thickness_nm=0.0),
+        dict(thickness_nm=-5.0),
+        dict(substrate_reflectance=1.2),
+        dict(clear_coat_thickness_nm=-1.0),
+    ],
+)
+def test_bad_film(kwargs):
+    args = dict(pigment=PIG, binder=N_B, distribution=monodisperse(D), volume_fraction=0.05, thickness_nm=1e4)
+    args.update(kwargs)
+    with pytest.raises(InvalidInputError):
+        PaintFilm(**args)
+
+
+def test_bad_indices_and_solver():
+    with pytest.raises(InvalidInputError, match="k < 0"):
+        paint_reflectance(PaintFilm(2.0 - 0.1j, N_B, monodisperse(D), 0.05, 1e4), W)
+    with pytest.raises(InvalidInputError, match="k < 0"):
+        paint_reflectance(PaintFilm(PIG, 1.5 - 1e-6j, monodisperse(D), 0.05, 1e4), W)
+    with pytest.raises(InvalidInputError):
+        paint_reflectance(PaintFilm(PIG, N_B, monodisperse(D), 0.05, 1e4), W, solver="monte-carlo")
+
+
+@pytest.mark.slow
+def test_hematite_demo(tmp_path):
+    from nmmm.layers.examples import hematite_demo
+
+    out = hematite_demo(tmp_path)
+    assert all(p.endswith(".png") for p in out["figures"])
+    L = [r["L_ad"] for r in out["tables"]["grain_size"]]
+    # the painters' rule: beyond ~250 nm, bigger grains look darker
+    assert L[2] > L[3] > L[4] > L[5]
