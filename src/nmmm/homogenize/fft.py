@@ -8,7 +8,7 @@
 The quasi-static problem div(ε(x)(E0 + ∇φ)) = 0 with φ periodic is solved for the d unit
 loadings E0 = e_j; the effective tensor is defined by ε_eff · E0 = ⟨ε E⟩. The default is the
 Galerkin form solved by COCG (:mod:`nmmm.homogenize.solvers`) with Willot's rotated Green
-operator (:mod:`nmmm.homogenize.green`); on failure BiCGStab then GMRES are tried, and if
+operator (2015) (:mod:`nmmm.homogenize.green`); on failure BiCGStab then GMRES are tried, and if
 every solver fails a :class:`nmmm.ConvergenceError` carrying the residual histories is
 raised — never a silently wrong tensor.
 
@@ -211,7 +211,14 @@ def fft_permittivity(
         Complex permittivity of each phase (Im ε ≥ 0): scalars, or 1-D arrays over wavelength
         (all of the same length), or Materials (then ``wavelength_nm`` is required).
     green : {"willot2015", "willot2014", "continuous"}
-        Green operator (:data:`nmmm.homogenize.green.GREEN_OPERATORS`).
+        Green operator (:data:`nmmm.homogenize.green.GREEN_OPERATORS`). The default, Willot's
+        rotated scheme (2015), was the most accurate at a given resolution on the exact
+        references (coated sphere, Keller duality) and, like the finite-difference one of
+        Willot et al. (2014), needs few iterations for metal-dielectric contrasts (44-52
+        projections against 156-2000 for the spectral one on a 2-D Boolean model with
+        ε = −50 + {20, 5}i). Its known weakness: voxels touching only at a corner are
+        connected (the checkerboard converges only as 1/N); use "willot2014" or
+        "continuous" for such contact-dominated cells.
     solver : {"cocg", "bicgstab", "gmres", "eyre_milton", "basic"}
         Iterative solver (:data:`nmmm.homogenize.solvers.SOLVERS`).
     tol : float
@@ -292,7 +299,11 @@ def fft_permittivity(
     dirs = tuple(range(d)) if directions is None else tuple(int(j) for j in directions)
     if not dirs or any(j < 0 or j >= d for j in dirs):
         raise InvalidInputError(f"directions must be axes in 0..{d - 1}, got {directions!r}")
-    op = green_operator(arr.shape, green)
+    spacing = None
+    if voxel_nm is not None:
+        spacing = np.broadcast_to(np.asarray(voxel_nm, dtype=float), (d,))
+        spacing = tuple(spacing / spacing.min())
+    op = green_operator(arr.shape, green, spacing=spacing)
     problem = Problem(compact, values.size, op, dt, workers)
     nw = table.shape[0]
     tensor = np.full((nw, d, d), np.nan + 0j)
