@@ -108,3 +108,30 @@ def test_parameter_validation():
         Parameter("t", 5.0, min=10.0, max=20.0)
     with pytest.raises(InvalidInputError, match="finite"):
         Parameter("t", np.nan)
+
+
+def test_roughness_thickness_recovered(silicon):
+    """Si under a 3 nm Bruggeman roughness layer (50 % void, nmmm.ema): the
+    roughness thickness is fitted back within its uncertainty from noisy data at 2 angles."""
+    model = EllipsometryModel.from_dict({
+        "substrate": {"material": "main/Si/Green-2008"},
+        "layers": [{"name": "rough", "roughness": True, "thickness_nm": {"value": 1.0, "min": 0, "max": 20}}]})
+    truth = {"rough.thickness_nm": 3.0}
+    data = EllipsometryData.from_model(model.build(truth), np.linspace(300, 800, 51), [65.0, 75.0], 0.01, 0.02,
+                                       noise_seed=4)
+    res = model.fit(data)
+    assert abs(res["rough.thickness_nm"] - 3.0) < 4 * res.stderr["rough.thickness_nm"]
+    assert res.stderr["rough.thickness_nm"] < 0.05
+
+
+def test_thickness_scan_finds_interference_order():
+    """A start 150 nm off lands in a wrong local minimum; the vectorised thickness scan finds the
+    right order, and the fit then converges to the truth."""
+    model = epoxy_model(thickness=1000.0, A=1.553, B=0.0068)
+    truth = dict(model.values, **{"epoxy.thickness_nm": 850.0})
+    data = EllipsometryData.from_model(model.build(truth), np.linspace(400, 1000, 61), [70.0], 0.02, 0.05,
+                                       noise_seed=2)
+    scanned, grid, chi2 = model.scan(data, "epoxy.thickness_nm", np.arange(500.0, 1200.0, 2.0))
+    assert grid.size == chi2.size and abs(scanned.values["epoxy.thickness_nm"] - 850.0) <= 2.0
+    res = scanned.fit(data)
+    assert abs(res["epoxy.thickness_nm"] - 850.0) < 4 * res.stderr["epoxy.thickness_nm"]

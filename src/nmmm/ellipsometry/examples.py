@@ -60,18 +60,7 @@ def epoxy_on_silicon(output_dir=None, seed: int = 7, sigma_psi_deg: float = 0.02
                                        noise_seed=seed, name="epoxy on Si (synthetic)")
     # the fit starts from the model file's values, 50 nm and 0.05 in n away from the truth;
     # a coarse thickness scan first picks the right interference order (as in practice)
-    start = dict(model.values)
-    best = None
-    for t in np.arange(600.0, 1100.0, 10.0):
-        trial = model.with_values({**start, "epoxy.thickness_nm": t})
-        from nmmm.ellipsometry.forward import psi_delta
-        from nmmm.ellipsometry.fitting import psi_delta_residuals
-
-        psi, delta = psi_delta(trial.build(), data.wavelength_nm, data.angle_deg)
-        chi2 = float(np.sum(psi_delta_residuals(data, psi, delta) ** 2))
-        if best is None or chi2 < best[0]:
-            best = (chi2, t)
-    model = model.with_values({**start, "epoxy.thickness_nm": best[1]})
+    model, _, _ = model.scan(data, "epoxy.thickness_nm", np.arange(600.0, 1100.0, 5.0))
     result = model.fit(data)
     rows = []
     for name in result.names:

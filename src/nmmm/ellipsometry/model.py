@@ -150,7 +150,12 @@ def make_stack(ambient, layers, substrate):
     layers of zero thickness are left out."""
     from nmmm.layers.thinfilm import Stack
 
-    kept = [(m, float(t)) for m, t in layers if float(t) > 0]
+    kept = []
+    for m, t in layers:
+        t = np.asarray(t, dtype=float)
+        if t.ndim == 0 and t <= 0:
+            continue
+        kept.append((m, t if t.ndim else float(t)))
     return Stack(layers=kept, ambient=ambient, substrate=substrate)
 
 
@@ -371,6 +376,51 @@ class EllipsometryModel:
         raise InvalidInputError(f"no layer {layer!r}; layers: {[lay.name for lay in self.layers]}")
 
     # -- fitting ------------------------------------------------------------------------------
+    def scan(self, data, parameter: str, values, *, set_best: bool = True):
+        """χ² of the data over a grid of one parameter, the others at their current values.
+
+        Used to find the start of a fit where χ² has many local minima (the interference order
+        of a thick film). A layer thickness is scanned in one vectorised ``Stack.rt`` call (its
+        thickness-grid axis); other parameters one value at a time.
+
+        Returns
+        -------
+        (model, values, chi2)
+            ``model`` is this model with ``parameter`` set to the best value (``set_best``), or
+            unchanged.
+        """
+        from nmmm.ellipsometry.fitting import psi_delta_residuals
+        from nmmm.ellipsometry.forward import psi_delta_from_rho
+        from nmmm.spectra import check_finite
+
+        grid = np.atleast_1d(check_finite(values, "values").astype(float))
+        names = [p.name for p in self.parameters]
+        if parameter not in names:
+            raise InvalidInputError(f"unknown parameter {parameter!r}; the model has {names}")
+        v = self.values
+        layer_of = {lay.thickness.name: lay.name for lay in self.layers}
+        if parameter in layer_of:
+            if np.any(grid <= 0):
+                raise InvalidInputError("scan thicknesses must be > 0 nm")
+            built = [(m, grid if name == layer_of[parameter] else t) for name, m, t in self.media(v)]
+            stack = make_stack(self.ambient.build(v), built, self.substrate.build(v))
+            res = stack.rt(data.wavelength_nm, data.angle_deg, grid=False)
+            psi, delta = psi_delta_from_rho(res.rp / res.rs)
+            chi2 = np.array([np.sum(psi_delta_residuals(data, p, d) ** 2) for p, d in zip(psi, delta)])
+        else:
+            from nmmm.ellipsometry.forward import psi_delta
+
+            chi2 = np.empty(grid.size)
+            for i, x in enumerate(grid):
+                p, d = psi_delta(self.build({**v, parameter: x}), data.wavelength_nm, data.angle_deg)
+                chi2[i] = np.sum(psi_delta_residuals(data, p, d) ** 2)
+        model = self
+        if set_best:
+            par = next(p for p in self.parameters if p.name == parameter)
+            best = float(np.clip(grid[int(np.argmin(chi2))], par.min, par.max))
+            model = self.with_values({**v, parameter: best})
+        return model, grid, chi2
+
     def fit(self, data, **kwargs) -> FitResult:
         """Fit the varied parameters to ``data`` (all angles at once); see
         :func:`nmmm.ellipsometry.fitting.fit_psi_delta`. The ``[fit]`` options of the model
