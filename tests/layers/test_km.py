@@ -49,6 +49,7 @@ def test_limits():
     q = np.array([1e-4, 0.01, 0.3, 5.0])
     np.testing.assert_allclose(km_reflectance(q, 1.0, 1e4, 0.5), 1 + q - np.sqrt(q * q + 2 * q), rtol=1e-10)
     np.testing.assert_allclose(km_r_infinity(q), 1 + q - np.sqrt(q**2 + 2 * q))
+    assert float(km_r_infinity(np.inf)) == 0.0  # no scattering: nothing comes back
     # K/S of R_inf is the KM function (1-R)^2/(2R)
     R = km_r_infinity(q)
     np.testing.assert_allclose((1 - R) ** 2 / (2 * R), q, rtol=1e-9)

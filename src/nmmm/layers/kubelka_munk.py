@@ -126,8 +126,13 @@ def km_coefficients(mu_a, mu_s, g, method: str = "gate"):
 # --------------------------------------------------------------------------------------
 def km_r_infinity(k_over_s):
     """Reflectance of an opaque layer, R∞ = 1 + K/S − √((K/S)² + 2K/S) (Kubelka 1948, eq. 6)."""
-    q = _nonneg(k_over_s, "k_over_s")
-    return 1 + q - np.sqrt(q * q + 2 * q)
+    q = np.asarray(k_over_s, dtype=float)
+    if np.any(np.isnan(q)) or np.any(q < 0):
+        raise InvalidInputError("k_over_s must be >= 0 (np.inf, no scattering, gives R = 0)")
+    # the same expression rationalised, 1 / (1 + q + √(q² + 2q)): no cancellation for large q
+    with np.errstate(invalid="ignore", over="ignore"):
+        r = 1.0 / (1 + q + np.sqrt(q * q + 2 * q))
+    return np.where(np.isinf(q), 0.0, r)[()]
 
 
 def _b_coth(b, SX):
