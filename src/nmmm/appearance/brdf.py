@@ -167,13 +167,32 @@ def smith_g1_ggx(cos_v, alpha):
     return 2.0 / (1.0 + np.sqrt(1.0 + alpha * alpha * t2))
 
 
-def _lerp_table(table, theta_deg, step_deg):
-    """Linear interpolation of ``table`` (NT, L) at angles ``theta_deg`` (P,) on a uniform
-    grid of step ``step_deg`` -> (P, L)."""
+def _lerp_table_np(table, theta_deg, step_deg):
     x = np.clip(theta_deg / step_deg, 0.0, table.shape[0] - 1.000001)
     i = x.astype(np.intp)
     f = (x - i)[:, None]
     return table[i] * (1.0 - f) + table[i + 1] * f
+
+
+def _lerp_table_loop(table, theta_deg, step_deg, out):
+    n = table.shape[0]
+    for p in range(theta_deg.shape[0]):
+        x = min(max(theta_deg[p] / step_deg, 0.0), n - 1.000001)
+        i = int(x)
+        f = x - i
+        for l in range(table.shape[1]):
+            out[p, l] = table[i, l] * (1.0 - f) + table[i + 1, l] * f
+
+
+def _lerp_table(table, theta_deg, step_deg):
+    """Linear interpolation of ``table`` (NT, L) at angles ``theta_deg`` (P,) on a uniform
+    grid of step ``step_deg`` -> (P, L)."""
+    theta_deg = np.ascontiguousarray(theta_deg, dtype=float).ravel()
+    if _lerp_nb is None or theta_deg.size * table.shape[1] < 4096:
+        return _lerp_table_np(table, theta_deg, step_deg)
+    out = np.empty((theta_deg.size, table.shape[1]))
+    _lerp_nb(np.ascontiguousarray(table, dtype=float), theta_deg, float(step_deg), out)
+    return out
 
 
 def _lerp1(table, theta_deg, step_deg):
@@ -555,8 +574,85 @@ class _Tables:
             fbar = np.where(sub0 > 1e-12, np.clip(sub / sub0, 0, 1), 0.0)
             Fms = fbar ** 2 * E0_bar / (1 - fbar * (1 - E0_bar))
             self.Fms = np.where(np.isfinite(Fms), Fms, 0.0)
+        if self.has_flakes:
+            # trapped light in a flake layer escapes far less easily than Kulla–Conty's
+            # "escape per cycle = Ē⁰" assumes: use the interreflection model instead
+            self.Fms = self._ms_factor()
+        with np.errstate(divide="ignore", invalid="ignore"):
             self.Kms = np.where(1 - E0_bar > 1e-9, self.Fms / (np.pi * (1 - E0_bar)), 0.0)
         self.E0_bar = E0_bar
+
+    def _ms_factor(self, n_mu: int = 48, n_phi: int = 64, max_bounces: int = 400):
+        """F_ms(λ): multiply scattered light that escapes, relative to the lossless paint.
+
+        An azimuthally averaged interreflection model inside the coat: internal polar
+        angles on Gauss–Legendre nodes; one bounce is the flake layer's reflection
+        operator (oriented-mirror single scattering with mean-field attenuation, plus the
+        base seen through the flakes, with base ↔ flake-underside interreflections) and
+        the coat seen from below (Fresnel transmission out, the rest — all of it beyond
+        the critical angle — mirrored back down). Starting from diffuse light entering
+        the coat, the light escaping after two or more bounces, ms(λ), is summed; the
+        same for the lossless paint gives ms⁰, and F_ms = ms/ms⁰ (1 when lossless, so the
+        white-furnace closure is untouched).
+        """
+        n, L = self.n, self.L
+        xg, wg = np.polynomial.legendre.leggauss(n_mu)
+        th = 0.25 * np.pi * (xg + 1)  # internal polar angle nodes
+        wth = 0.25 * np.pi * wg
+        mu = np.cos(th)
+        dmu = np.sin(th) * wth  # ∫ dμ weights
+        ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi
+        a = _lerp1(self.a_tab, np.degrees(th), self.step) / mu  # a(μ)/μ
+        S = a[None, :] + a[:, None]  # (j: out, k: in)
+        phi = _phi_mean(S[..., None] * self.tau_e)  # (j, k, L)
+        si, so = np.sin(th)[None, :], np.sin(th)[:, None]
+        ci, co = mu[None, :], mu[:, None]
+        Kf = np.zeros((n_mu, n_mu, L))
+        Kf0 = np.zeros((n_mu, n_mu, L))
+        for q in ph:  # azimuth difference between in and out
+            hx, hy, hz = si + so * np.cos(q), so * np.sin(q) + 0 * si, ci + co
+            hn = np.sqrt(hx * hx + hy * hy + hz * hz)
+            cd = (si * hx + ci * hz) / hn
+            g = self.tau * self.tilt.pdf(hz / hn) / (4 * ci * co)  # (j, k)
+            dcd = _deg(cd.ravel())
+            Kf += g[..., None] * _lerp_table(self.Rf, dcd, self.step).reshape(g.shape + (L,))
+            Kf0 += g[..., None] * _lerp_table(self.Rf0, dcd, self.step).reshape(g.shape + (L,))
+        wout = (mu * dmu * 2 * np.pi / n_phi)[:, None, None]  # μo dμo dφ (two symmetric halves)
+        Kf *= phi * wout
+        Kf0 *= phi * wout
+        t = np.exp(-np.outer(a, self.tau_e))  # (K, L) transmission through the flake layer
+        tb = 2 * np.einsum("k,kl->l", mu * dmu, 1 - t)  # diffuse light stopped by flakes
+        Rbar = _hemi_mean(self.Rf, np.cos(np.radians(np.linspace(0.0, 90.0, _NT))))
+        Rbar0 = _hemi_mean(self.Rf0, np.cos(np.radians(np.linspace(0.0, 90.0, _NT))))
+        # coat from below: transmission out through the escape cone
+        mu_c = np.sqrt(1 - 1 / (n * n))
+        mu_ext = np.sqrt(np.clip(1 - n * n * (1 - mu * mu), 0, 1))
+        Tint = np.where(mu[:, None] > mu_c, _lerp_table(self.Tc, _deg(mu_ext), self.step), 0.0)  # (K, L)
+        d0 = Tint * (mu * dmu)[:, None]  # diffuse light entering the coat
+        d0 = d0 / d0.sum(axis=0, keepdims=True)
+
+        def escaped(Kflake, rho, Rb):
+            base = (rho / (1 - rho * Rb * tb))[None, None, :] * (t[None, :, :] * t[:, None, :]) / np.pi \
+                * 2 * np.pi * (mu * dmu)[:, None, None]
+            K = Kflake + base
+            d = d0.copy()
+            first = None
+            total = np.zeros(L)
+            for it in range(max_bounces):
+                u = np.einsum("jkl,kl->jl", K, d)
+                e = np.sum(Tint * u, axis=0)
+                total += e
+                if first is None:
+                    first = e.copy()
+                d = (1 - Tint) * u
+                if d.sum(axis=0).max() < 1e-7:
+                    break
+            return total - first
+
+        ms = escaped(Kf, self.rho, Rbar)
+        ms0 = escaped(Kf0, np.ones(L), Rbar0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(ms0 > 1e-12, np.clip(ms / ms0, 0.0, 1.0), 0.0)
 
     def Es_tab_a(self, tha):
         return _lerp_table(self.Es, tha, self.step)
@@ -821,9 +917,11 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
 
 if _nb is not None:
     _kernel = _njit(_kernel_py)
+    _lerp_nb = _nb.njit(cache=True)(_lerp_table_loop)
 else:  # pragma: no cover
     _prange = range
     _kernel = _kernel_py
+    _lerp_nb = None
 
 
 def _hemi_mean(values, mu):
@@ -913,8 +1011,12 @@ def flake_list_reflection(paint: PaintBRDF, flakes: FlakeList, wavelength_nm, wi
     tilt = flakes.tilt
     if tilt is None:
         tilt = flakes.to_flake_layer().tilt
-    a = np.asarray(tilt.projected_mean(np.array([ip[2]] + list(np.clip(op[:, 2], 1e-6, 1)))), float)
-    S = a[0] / ip[2] + a[1:] / np.clip(op[:, 2], 1e-6, 1)
+    if tab.has_flakes and tilt is tab.tilt:
+        a_tab = tab.a_tab
+    else:
+        a_tab = np.asarray(tilt.projected_mean(np.cos(np.radians(np.linspace(0.0, 90.0, _NT)))), float)
+    opz = np.clip(op[:, 2], 1e-6, 1)
+    S = _lerp1(a_tab, np.atleast_1d(_deg(ip[2])), tab.step)[0] / ip[2] + _lerp1(a_tab, _deg(opz), tab.step) / opz
     tau = flakes.optical_depth
     if paint.flakes is not None:
         # τ_e/τ from the paint's tables (semi-transparent flakes)

@@ -1,0 +1,264 @@
+"""Tests of nmmm.appearance.brdf: energy conservation, reciprocity, Fresnel limits,
+Saunderson, table export, bad input.
+
+Independent references: ``tmm`` (Byrnes) for Fresnel reflectances; the published
+internal diffuse reflectance of an n = 1.5 interface, r_i = 0.596 (Judd 1942, J. Res.
+NBS 29, 329; tabulated in Kortüm, *Reflectance Spectroscopy*, 1969); hemispherical
+integrals computed here by brute-force quadrature over outgoing directions (the model's
+own albedo tables use a different parameterisation, over flake normals).
+"""
+
+import numpy as np
+import pytest
+import tmm
+
+from nmmm.appearance.brdf import (
+    COMPONENTS,
+    ClearCoat,
+    PaintBRDF,
+    brdf_table,
+    clear_dielectric,
+    interference_paint,
+    metallic_paint,
+    opaque_paint,
+    rusinkiewicz_to_directions,
+    write_brdf_table,
+)
+from nmmm.appearance.flakes import FlakeLayer, MetalFlakeOptics, ThinFilmFlakeOptics, gaussian_tilt
+from nmmm.errors import InvalidInputError
+
+W = np.linspace(400.0, 700.0, 7)
+
+
+def _dir(theta_deg, phi_deg=0.0):
+    t, p = np.radians(theta_deg), np.radians(phi_deg)
+    return np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
+
+
+def hemispherical_albedo(brdf, wi, n_theta=160, n_phi=160, w=W):
+    """∫ f cos θo dωo by Gauss–Legendre in θo and midpoint in φo, plus the Dirac."""
+    x, wx = np.polynomial.legendre.leggauss(n_theta)
+    th = 0.25 * np.pi * (x + 1)
+    wt = 0.25 * np.pi * wx
+    ph = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    d = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
+    f = brdf(w, wi, d)
+    wgt = (wt * np.sin(th) * np.cos(th))[:, None] * (2 * np.pi / n_phi)
+    return np.einsum("ij,ijl->l", wgt, f) + brdf.specular_reflectance(w, wi)
+
+
+class _PerfectMirror:
+    """Lossless flake optics (R = 1, T = 0), duck-typed like MetalFlakeOptics."""
+
+    def rt(self, cos_local, wavelength_nm, n_binder):
+        shape = np.shape(cos_local) + (np.size(wavelength_nm),)
+        return np.ones(shape), np.zeros(shape)
+
+
+LOSSLESS = {
+    "white opaque, smooth coat": opaque_paint(1.0),
+    "white opaque, rough coat": opaque_paint(1.0, roughness=0.3),
+    "mirror flakes over white": PaintBRDF(ClearCoat(1.5), 1.0, FlakeLayer(_PerfectMirror(), gaussian_tilt(12), 1.5)),
+    "mirror flakes, dense, rough coat": PaintBRDF(ClearCoat(1.5, 0.15), 1.0,
+                                                   FlakeLayer(_PerfectMirror(), gaussian_tilt(20), 4.0)),
+    # TiO2/mica/TiO2 with non-absorbing constant indices: R + T = 1 for each flake
+    "dielectric interference flakes over white": PaintBRDF(
+        ClearCoat(1.5), 1.0, FlakeLayer(ThinFilmFlakeOptics(((2.5, 120.0), (1.58, 350.0), (2.5, 120.0))),
+                                        gaussian_tilt(10), 1.0)),
+}
+
+
+@pytest.mark.parametrize("name", list(LOSSLESS))
+@pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 80.0])
+def test_white_furnace_lossless_reflects_everything(name, theta):
+    a = hemispherical_albedo(LOSSLESS[name], _dir(theta, 20.0))
+    assert np.allclose(a, 1.0, atol=3e-3), a
+
+
+@pytest.mark.parametrize("brdf", [metallic_paint(), interference_paint(), opaque_paint(0.7, roughness=0.2),
+                                  metallic_paint(tilt=25, optical_depth=5.0, body_reflectance=0.9)],
+                         ids=["metallic", "interference", "opaque-rough", "metallic-dense"])
+def test_lossy_paints_never_gain_energy_and_tables_match_quadrature(brdf):
+    for theta in (0.0, 45.0, 75.0):
+        wi = _dir(theta)
+        a = hemispherical_albedo(brdf, wi)
+        assert np.all(a <= 1.0 + 1e-3)
+        assert np.all(a > 0)
+        # the model's albedo tables (quadrature over flake normals) agree with brute force
+        assert np.allclose(brdf.albedo(W, wi), a, atol=3e-3)
+
+
+@pytest.mark.parametrize("brdf", [metallic_paint(), interference_paint(), opaque_paint(0.4, roughness=0.25),
+                                  metallic_paint(roughness=0.1, tilt=5)],
+                         ids=["metallic", "interference", "opaque-rough", "metallic-rough-aligned"])
+def test_reciprocity(brdf):
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(2, 500, 3))
+    v[..., 2] = np.abs(v[..., 2])
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    f1 = brdf(W, v[0], v[1])
+    f2 = brdf(W, v[1], v[0])
+    assert np.allclose(f1, f2, rtol=1e-10, atol=1e-14)
+
+
+def _tmm_unpolarized_R(n_list, d_list, theta_deg, wl):
+    return 0.5 * sum(tmm.coh_tmm(p, n_list, d_list, np.radians(theta_deg), wl)["R"] for p in "sp")
+
+
+@pytest.mark.parametrize("theta", [0.0, 20.0, 45.0, 56.31, 70.0, 85.0])
+def test_fresnel_limit_clear_dielectric_matches_tmm(theta):
+    b = clear_dielectric(1.5)
+    R = b.specular_reflectance(W, _dir(theta))
+    ref = _tmm_unpolarized_R([1.0, 1.5], [np.inf, np.inf], theta, 550.0)
+    assert np.allclose(R, ref, atol=2e-4)  # 0.5° table, linear interpolation
+
+
+def test_no_flakes_no_pigment_is_a_clear_dielectric():
+    """A metallic paint with zero flakes and a black base is only the coat's Fresnel."""
+    b = metallic_paint(optical_depth=0.0, body_reflectance=0.0)
+    rng = np.random.default_rng(0)
+    v = rng.normal(size=(2, 200, 3))
+    v[..., 2] = np.abs(v[..., 2])
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    assert np.all(b(W, v[0], v[1]) == 0.0)
+    for theta in (10.0, 60.0):
+        ref = _tmm_unpolarized_R([1.0, 1.5], [np.inf, np.inf], theta, 500.0)
+        assert np.allclose(hemispherical_albedo(b, _dir(theta)), ref, atol=2e-4)
+
+
+def test_dispersive_coat_follows_its_index():
+    from nmmm.materials.models import Cauchy
+
+    import inspect
+    params = inspect.signature(Cauchy).parameters
+    coat = Cauchy(1.5, 4000.0) if "A" not in params else Cauchy(A=1.5, B=4000.0)
+    b = PaintBRDF(ClearCoat(coat), 0.0, None)
+    n = np.real(coat.nk(W))
+    R = b.specular_reflectance(W, _dir(0.0))
+    assert np.allclose(R, ((n - 1) / (n + 1)) ** 2, atol=1e-6)
+
+
+def test_saunderson_directional_albedo_of_opaque_paint():
+    """R(θ) = F(θ) + (1 − F(θ))(1 − r_i) ρ / (1 − r_i ρ), r_i = 0.596 for n = 1.5 (Judd 1942)."""
+    rho = np.linspace(0.1, 0.9, W.size)
+    b = opaque_paint((W, rho))
+    for theta in (0.0, 45.0):
+        F = _tmm_unpolarized_R([1.0, 1.5], [np.inf, np.inf], theta, 550.0)
+        ri = 0.596
+        ref = F + (1 - F) * (1 - ri) * rho / (1 - ri * rho)
+        assert np.allclose(hemispherical_albedo(b, _dir(theta)), ref, atol=2e-3)
+
+
+def test_solid_paint_diffuse_part_is_lambertian_times_fresnel_transmission():
+    b = opaque_paint(0.5)
+    f1 = b(W, _dir(10.0), _dir(30.0, 180.0))
+    f2 = b(W, _dir(10.0), _dir(30.0, 90.0))
+    assert np.allclose(f1, f2)  # no azimuthal dependence without flakes
+
+
+def test_numba_and_numpy_paths_agree():
+    rng = np.random.default_rng(5)
+    v = rng.normal(size=(2, 300, 3))
+    v[..., 2] = np.abs(v[..., 2])
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    for b in (metallic_paint(roughness=0.05), interference_paint()):
+        assert np.allclose(b(W, v[0], v[1]), b(W, v[0], v[1], method="numpy"), rtol=1e-9, atol=1e-14)
+
+
+def test_components_add_up():
+    b = metallic_paint(roughness=0.1)
+    wi, wo = _dir(45.0), _dir(20.0, 180.0)
+    parts = sum(b(W, wi, wo, components=c) for c in COMPONENTS)
+    assert np.allclose(parts, b(W, wi, wo))
+
+
+def test_metallic_lightness_falls_away_from_specular():
+    """Metallic paints are bright near the specular direction and dark far from it."""
+    b = metallic_paint()
+    wi = _dir(45.0)
+    vals = [b(W, wi, _dir(abs(45 - a), 180.0 if 45 - a > 0 else 0.0)).mean() for a in (15, 25, 45, 75, 110)]
+    assert np.all(np.diff(vals) < 0)
+    assert vals[0] > 3 * vals[-1]
+
+
+def test_output_shapes_and_broadcasting():
+    b = opaque_paint(0.3)
+    wi = _dir(30.0)
+    wo = np.stack([_dir(t, 180.0) for t in (0, 20, 40)])
+    assert b(W, wi, wo).shape == (3, W.size)
+    assert b(W, wi[None, None], wo[None]).shape == (1, 3, W.size)
+    assert b(550.0, wi, wo[0]).shape == (1,)
+
+
+def test_grazing_directions_give_zero():
+    b = metallic_paint()
+    assert np.all(b(W, np.array([1.0, 0.0, 0.0]), _dir(30.0)) == 0)
+
+
+# -- bad input ---------------------------------------------------------------------------
+
+
+def test_direction_below_surface_raises():
+    b = opaque_paint(0.5)
+    with pytest.raises(InvalidInputError, match="below the surface"):
+        b(W, _dir(30.0), np.array([0.0, 0.6, -0.8]))
+
+
+def test_non_unit_direction_raises():
+    with pytest.raises(InvalidInputError, match="unit"):
+        opaque_paint(0.5)(W, np.array([0.0, 0.0, 2.0]), _dir(10.0))
+
+
+def test_negative_flake_density_raises():
+    with pytest.raises(InvalidInputError, match=">= 0"):
+        metallic_paint(optical_depth=-1.0)
+    with pytest.raises(InvalidInputError, match="density"):
+        FlakeLayer.from_areal_density(MetalFlakeOptics(1 + 5j), gaussian_tilt(10), -5.0, 15e3)
+
+
+def test_body_reflectance_outside_unit_interval_raises():
+    with pytest.raises(InvalidInputError, match=r"\[0, 1\]"):
+        opaque_paint(1.2)(W, _dir(0.0), _dir(10.0))
+
+
+def test_absorbing_coat_raises():
+    with pytest.raises(InvalidInputError, match="absorbs"):
+        PaintBRDF(ClearCoat(1.5 + 0.1j))(W, _dir(0.0), _dir(10.0))
+
+
+def test_unknown_component_raises():
+    with pytest.raises(InvalidInputError, match="component"):
+        opaque_paint(0.5)(W, _dir(0.0), _dir(10.0), components="sheen")
+
+
+# -- table export --------------------------------------------------------------------------
+
+
+def test_rusinkiewicz_coordinates_geometry():
+    th, td, pd = 25.0, 40.0, 70.0
+    wi, wo = rusinkiewicz_to_directions(th, td, pd)
+    h = (wi + wo) / np.linalg.norm(wi + wo)
+    assert np.isclose(np.degrees(np.arccos(h[2])), th)
+    assert np.isclose(np.degrees(np.arccos(wi @ h)), td)
+    assert np.isclose(np.linalg.norm(wi), 1) and np.isclose(np.linalg.norm(wo), 1)
+
+
+def test_brdf_table_values_and_files(tmp_path):
+    b = metallic_paint(roughness=0.05)
+    ds = brdf_table(b, W, n_theta_h=12, n_theta_d=10, n_phi_d=8, reduce=None)
+    assert ds["brdf"].dims == ("theta_h_deg", "theta_d_deg", "phi_d_deg", "wavelength_nm")
+    i, j, k = 5, 3, 2
+    th, td, pd = (float(ds[c][x]) for c, x in (("theta_h_deg", i), ("theta_d_deg", j), ("phi_d_deg", k)))
+    wi, wo = rusinkiewicz_to_directions(th, td, pd)
+    assert np.allclose(ds["brdf"].values[i, j, k], b(W, wi, wo))
+    red = brdf_table(b, W, n_theta_h=12, n_theta_d=10, n_phi_d=8)
+    assert red["brdf"].dims == ("theta_h_deg", "theta_d_deg", "wavelength_nm")
+    p = write_brdf_table(tmp_path / "t.nc", opaque_paint(0.5), W, n_theta_h=6, n_theta_d=6, n_phi_d=4)
+    import xarray as xr
+
+    with xr.open_dataset(p, engine="h5netcdf") as back:
+        assert back["brdf"].shape == (6, 6, W.size)
+        assert "specular_reflectance" in back
+    pc = write_brdf_table(tmp_path / "t.csv", opaque_paint(0.5), W, n_theta_h=4, n_theta_d=4, n_phi_d=2)
+    assert pc.read_text().splitlines()[0] == "theta_h_deg,theta_d_deg,wavelength_nm,brdf_per_sr"
