@@ -14,6 +14,8 @@ Public API
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
+from nmmm.homogenize.material import HomogenizedMaterial, apparent_property, homogenize
+from nmmm.homogenize.resolution import ResolutionStudy, extrapolate_resolution, richardson
 from nmmm.homogenize.green import GREEN_OPERATORS, GreenOperator, green_operator
 from nmmm.homogenize.solvers import SOLVERS
 from nmmm.homogenize.validity import (
@@ -29,6 +31,12 @@ from nmmm.homogenize.validity import (
 __all__ = [
     "fft_permittivity",
     "FFTHomogenization",
+    "homogenize",
+    "HomogenizedMaterial",
+    "apparent_property",
+    "extrapolate_resolution",
+    "richardson",
+    "ResolutionStudy",
     "GREEN_OPERATORS",
     "GreenOperator",
     "green_operator",

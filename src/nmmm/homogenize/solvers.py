@@ -270,6 +270,7 @@ def solve_gmres(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep
 
     A = LinearOperator((size, size), matvec=mv, dtype=problem.dtype)
     history: list = []
+    restart = max(1, min(int(restart), int(maxiter)))
     xs, info = gmres(A, b.reshape(-1), x0=None if x0 is None else x0.reshape(-1), rtol=tol, atol=0.0,
                      restart=restart, maxiter=max(1, maxiter // restart), callback=history.append,
                      callback_type="pr_norm")
