@@ -151,3 +151,12 @@ def test_bad_input(kwargs, match):
 def test_bad_layer_order():
     with pytest.raises(InvalidInputError, match="increase"):
         mie_coated(1.5, 2.0, 1.0, 300.0, 200.0, 500.0)
+
+
+def test_lossless_layered_sphere_conserves_energy_and_optical_theorem():
+    # real indices: each multipole is unitary (Re a_n = |a_n|^2), so Q_abs = 0 exactly
+    d = np.array([300.0, 900.0, 2500.0])
+    r = mie_multilayer([2.4 + 0j, 1.3 + 0j, 1.7 + 0j], 1.33, [0.4 * d, 0.7 * d, d], 500.0, angles_deg=[0.0])
+    np.testing.assert_allclose(r.qabs, 0.0, atol=1e-9)
+    x = r.size_parameter
+    np.testing.assert_allclose(r.qext, 4 * r.s1[..., 0].real / x**2, rtol=1e-10)
