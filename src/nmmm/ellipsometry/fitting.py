@@ -171,7 +171,7 @@ class FitResult:
         return "\n".join([head] + rows)
 
 
-def least_squares_fit(residual_function: Callable, parameters, n_residuals_hint: int | None = None, *,
+def least_squares_fit(residual_function: Callable, parameters, *,
                       absolute_sigma: bool = True, max_nfev: int | None = None, ftol: float = 1e-10,
                       xtol: float = 1e-10, gtol: float = 1e-10, rcond: float = 1e-10,
                       build: Callable | None = None, diff_step: float | None = None) -> FitResult:
@@ -202,18 +202,19 @@ def least_squares_fit(residual_function: Callable, parameters, n_residuals_hint:
         v.update(zip(names, (float(t) for t in x)))
         return {n: v[n] for n in names_all}
 
+    state = {"n_res": None, "last_error": None}
+
     def fun(x):
         try:
             r = np.asarray(residual_function(values_of(x)), dtype=float)
         except NmmmError as exc:
+            if state["n_res"] is None:  # the start values themselves are not valid
+                raise InvalidInputError(f"the model cannot be evaluated at the start values: {exc}") from None
             # a trial step gave non-physical parameters (e.g. Tauc-Lorentz needs E0 > Eg):
             # a large, finite penalty sends the trust region back
-            r = np.full(n_res, 1e6) if n_res else None
-            if r is None:
-                raise
+            state["last_error"] = str(exc)
             history.append(float("nan"))
-            fun.last_error = str(exc)
-            return r
+            return np.full(state["n_res"], 1e6)
         if not np.all(np.isfinite(r)):
             raise ConvergenceError(
                 f"the model gave non-finite Psi/Delta at parameters {values_of(x)}; bound the parameters "
@@ -221,12 +222,8 @@ def least_squares_fit(residual_function: Callable, parameters, n_residuals_hint:
         history.append(float(r @ r))
         return r
 
-    fun.last_error = None
-    n_res = 0
     r0 = fun(x0)
-    if fun.last_error:
-        raise InvalidInputError(f"the model cannot be evaluated at the start values: {fun.last_error}")
-    n_res = r0.size
+    n_res = state["n_res"] = r0.size
     m = len(varied)
     if n_res <= m:
         raise InvalidInputError(

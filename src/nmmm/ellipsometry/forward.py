@@ -47,6 +47,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.errors import InvalidInputError
+from nmmm.layers.fresnel import check_angle_deg  # the one check of angles of incidence
 from nmmm.spectra import as_wavelength_nm, check_finite
 
 __all__ = [
@@ -60,20 +61,6 @@ __all__ = [
     "check_angle_deg",
     "check_psi_deg",
 ]
-
-
-def check_angle_deg(angle_deg, name: str = "angle_deg") -> np.ndarray:
-    """Validate angles of incidence in degrees: finite, real, in [0°, 90°)."""
-    a = check_finite(angle_deg, name)
-    if np.iscomplexobj(a):
-        raise InvalidInputError(f"{name} must be real (degrees)")
-    a = a.astype(float, copy=False)
-    if np.any((a < 0) | (a >= 90)):
-        raise InvalidInputError(
-            f"{name} must lie in [0, 90) degrees (angle of incidence from the normal); "
-            f"got values in [{a.min():g}, {a.max():g}]. Angles in radians? Convert with np.degrees."
-        )
-    return a
 
 
 def check_psi_deg(psi_deg, name: str = "psi_deg") -> np.ndarray:
