@@ -124,3 +124,21 @@ def test_uniaxial_noisy_uncertainties(tmp_path):
     assert read_csv(files["mean"]).range_nm == (300.0, 800.0)
     with pytest.raises(InvalidInputError, match="share no wavelength"):
         uniaxial_from_two_orientations(d1, synthetic_uniaxial_data(o, e, [812.0], [65.0], "perpendicular"))
+
+
+def test_point_by_point_under_roughness(silicon, elli_table):
+    """A rough bulk sample (Si under 3 nm of Bruggeman 50 % void, pyElli's BruggemanEMA): the
+    point-by-point inversion with the roughness layer in the model returns Si's n + ik, whereas
+    the pseudo-dielectric function (no roughness) does not."""
+    from nmmm.ellipsometry.pseudo_dielectric import pseudo_dielectric
+
+    si = elli_table(silicon, W)
+    s = elli.Structure(elli.AIR, [elli.Layer(elli.BruggemanEMA(si, elli.AIR, 0.5), 3.0)], si)
+    data = pyelli_data(s, [70.0])
+    model = EllipsometryModel.from_dict({
+        "substrate": {"material": "main/Si/Green-2008"},
+        "layers": [{"name": "rough", "roughness": True, "thickness_nm": 3.0}]})
+    res = point_by_point(data, model, "substrate", start=silicon.nk(W) * 0.97)
+    np.testing.assert_allclose(res.nk, silicon.nk(W), rtol=1e-7)
+    pseudo = pseudo_dielectric(data.psi_deg, data.delta_deg, 70.0)
+    assert np.max(np.abs(pseudo - silicon.eps(W))) > 0.5

@@ -34,7 +34,8 @@ Then one line per data point, whitespace separated, either
 
 Only ellipsometric Ψ/Δ lines (tag ``E``) are read; other tags (``T``, ``R``, ``dpolE`` …)
 are skipped and counted in ``metadata``. The tan Ψ / cos Δ variant (``nm TRIG`` header) is
-refused with a clear error. σ columns are optional.
+refused with a clear error. σ columns are optional; columns after the sixth (depolarization)
+are ignored. Δ is taken in the usual convention (0° < Δ < 180° for a bulk absorber).
 """
 
 from __future__ import annotations
@@ -300,8 +301,8 @@ def write_csv(data: EllipsometryData, path) -> Path:
 _UNITS_TO_NM = {"nm": ("nm", 1.0), "nanometers": ("nm", 1.0), "angstroms": ("nm", 0.1), "a": ("nm", 0.1),
                 "microns": ("nm", 1e3), "um": ("nm", 1e3), "µm": ("nm", 1e3), "ev": ("ev", None)}
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_TAGGED = re.compile(rf"^\s*([A-Za-z][A-Za-z0-9]*)((?:\s+{_NUM}){{4,6}})\s*$")
-_UNTAGGED = re.compile(rf"^\s*((?:{_NUM}\s+){{3,5}}{_NUM})\s*$")
+_TAGGED = re.compile(rf"^\s*([A-Za-z][A-Za-z0-9]*)((?:\s+{_NUM}){{4,8}})\s*$")
+_UNTAGGED = re.compile(rf"^\s*((?:{_NUM}\s+){{3,7}}{_NUM})\s*$")
 
 
 def read_woollam(path, name: str | None = None) -> EllipsometryData:
@@ -341,6 +342,7 @@ def read_woollam(path, name: str | None = None) -> EllipsometryData:
             nums = m_t.group(2).split()
         else:
             nums = m_u.group(1).split()
+        nums = nums[:6]  # extra columns (e.g. depolarization) are not used
         rows.append([float(x) for x in nums] + [np.nan] * (6 - len(nums)))
     if not rows:
         raise DataFileError(f"{path}: no Psi/Delta data lines ('E wavelength angle psi delta [sigpsi sigdelta]') found")

@@ -233,7 +233,8 @@ def point_by_point(data, model, layer: str, values: dict | None = None, start=No
         The sample; its parameter values (``values``, default the model's own — e.g.
         ``fit_result.values``) fix thicknesses and the other layers.
     layer : str
-        Name of the layer to invert, or ``"substrate"`` (a bulk sample).
+        Name of the layer to invert, or ``"substrate"`` (a bulk sample). A roughness layer
+        directly on it follows the inverted n + ik (Bruggeman mixture with void at each step).
     start : complex array_like, optional
         Start n + ik per unique wavelength (default: the layer's model material).
     raise_on_failure : bool
@@ -266,10 +267,25 @@ def point_by_point(data, model, layer: str, values: dict | None = None, start=No
     sd = data.sigma_delta_deg if data.has_sigma else 1.0
     # materials of the other layers evaluated once on the data points
     fixed = [(name, m.nk(w_pts), t) for name, m, t in media]
+    # a roughness layer directly on the inverted medium mixes *its* n + ik with void (Bruggeman)
+    below = [lay.name for lay in model.layers[1:]] + ["substrate"]
+    rough_on_target = {lay.name: lay.fraction_void for lay, under in zip(model.layers, below)
+                       if lay.roughness and under == layer}
+    eps_void = ambient.eps(w_pts)
+
+    def nk_of(name, nkv, nk):
+        if name == layer:
+            return nk
+        if name in rough_on_target:
+            from nmmm.ema.bruggeman import bruggeman
+            from nmmm.materials.material import eps_to_nk
+
+            return eps_to_nk(bruggeman(eps_void, nk * nk, rough_on_target[name]))
+        return nkv
 
     def residuals(x):
         nk = (x[:, 0] + 1j * x[:, 1])[gid]
-        lay = [(nk if name == layer else nkv, t) for name, nkv, t in fixed]
+        lay = [(nk_of(name, nkv, nk), t) for name, nkv, t in fixed]
         sub = nk if layer == "substrate" else substrate
         stack = make_stack(ambient, lay, sub)
         res = stack.rt(w_pts, a_pts, grid=False)
