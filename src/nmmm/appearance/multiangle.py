@@ -1,0 +1,257 @@
+"""Multi-angle colour of gonio-apparent (effect) paints, flop index, colour travel.
+
+Multi-angle spectrophotometers illuminate at 45° and measure the spectral reflectance
+factor at several **aspecular angles** γ, measured in the plane of incidence from the
+specular direction, positive towards the illuminator (ASTM E284 / E2194). With the
+illumination at θ_i = 45°, the detector then lies at θ_v = 45° − γ from the normal on the
+specular side (γ = 45°: along the normal; γ = 110°: 65° on the illuminator's side;
+γ = −15°: 60° on the specular side, beyond the specular direction).
+
+- :data:`ASTM_E2194_ASPECULAR_DEG` — 15°, 45°, 110° (the three angles required for metal
+  flake pigmented materials), :data:`ASTM_E2194_ALL_ASPECULAR_DEG` adds the optional
+  25° and 75°.
+- :data:`ASTM_E2539_ASPECULAR_DEG` — −15°, 15°, 25°, 45°, 75°, 110° at 45° illumination
+  (interference pigments).
+- :func:`aspecular_directions` — (ωi, ωo) unit vectors for given aspecular angles.
+- :func:`multiangle_reflectance` — reflectance factors R = π f at those geometries.
+- :func:`multiangle_lab` -> :class:`MultiAngleColour` (L*, a*, b*, C*, h per angle).
+- :func:`flop_index` with :data:`FLOP_INDEX_METHODS` (``"Alman 1987"``, the X-Rite /
+  DuPont flop index FI = 2.69 (L*15 − L*110)^1.11 / (L*45)^0.86).
+- :func:`plot_colour_travel` — a*b* trajectory, L* against aspecular angle, swatches.
+
+References
+----------
+- ASTM E2194-14 (reapproved 2017), Standard Test Method for Multiangle Color
+  Measurement of Metal Flake Pigmented Materials.
+- ASTM E2539-14 (reapproved 2017), Standard Test Method for Multiangle Color
+  Measurement of Interference Pigments.
+- ASTM E284, Standard Terminology of Appearance (aspecular angle).
+- D. H. Alman, "Directional color measurement of metallic flake finishes", Proc. ISCC
+  Williamsburg Conference on Appearance (1987) 53–56 — the flop index used by X-Rite
+  multi-angle instruments (MA68, MA98).
+- C. S. McCamy, "Observation and measurement of the appearance of metallic materials.
+  Part I. Macro appearance", Color Res. Appl. 21 (1996) 292.
+- CIE 015:2018 Colorimetry — CIELAB.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from nmmm.errors import InvalidInputError
+from nmmm.spectra import as_wavelength_nm, check_finite
+
+__all__ = [
+    "ASTM_E2194_ASPECULAR_DEG",
+    "ASTM_E2194_ALL_ASPECULAR_DEG",
+    "ASTM_E2539_ASPECULAR_DEG",
+    "aspecular_directions",
+    "multiangle_reflectance",
+    "multiangle_lab",
+    "MultiAngleColour",
+    "flop_index",
+    "flop_index_alman1987",
+    "FLOP_INDEX_METHODS",
+    "plot_colour_travel",
+]
+
+#: ASTM E2194: the three aspecular angles required for metal flake pigmented materials (deg)
+ASTM_E2194_ASPECULAR_DEG = (15.0, 45.0, 110.0)
+#: ASTM E2194 with the optional 25° and 75° geometries (the usual five-angle instrument)
+ASTM_E2194_ALL_ASPECULAR_DEG = (15.0, 25.0, 45.0, 75.0, 110.0)
+#: ASTM E2539: aspecular angles at 45° illumination for interference pigments (deg)
+ASTM_E2539_ASPECULAR_DEG = (-15.0, 15.0, 25.0, 45.0, 75.0, 110.0)
+
+
+def aspecular_directions(aspecular_deg, illumination_deg: float = 45.0):
+    """Incident and viewing unit vectors for aspecular angles γ (deg).
+
+    The plane of incidence is xz; the light comes from +x (``wi`` = (sin θi, 0, cos θi)),
+    the specular direction is on −x. The viewing direction makes θ_v = θi − γ with the
+    normal, on the specular side for θ_v > 0. Returns ``(wi (3,), wo (K, 3))``; a
+    geometry below the horizon (|θi − γ| ≥ 90°) raises :class:`InvalidInputError`.
+    """
+    g = np.atleast_1d(check_finite(aspecular_deg, "aspecular_deg")).astype(float)
+    ti = float(check_finite(illumination_deg, "illumination_deg"))
+    if not 0 <= ti < 90:
+        raise InvalidInputError(f"illumination_deg must lie in [0, 90), got {ti}")
+    tv = ti - g
+    if np.any(np.abs(tv) >= 90):
+        bad = g[np.abs(tv) >= 90]
+        raise InvalidInputError(
+            f"aspecular angle(s) {bad.tolist()} put the detector below the surface at {ti}° illumination; "
+            f"choose γ in ({ti - 90:g}, {ti + 90:g})"
+        )
+    r = np.radians(tv)
+    wi = np.array([np.sin(np.radians(ti)), 0.0, np.cos(np.radians(ti))])
+    wo = np.stack([-np.sin(r), np.zeros_like(r), np.cos(r)], axis=-1)
+    return wi, wo
+
+
+def multiangle_reflectance(brdf, wavelength_nm, aspecular_deg=ASTM_E2539_ASPECULAR_DEG,
+                           illumination_deg: float = 45.0) -> np.ndarray:
+    """Spectral reflectance factors R(γ, λ) = π f(λ, ωi, ωo) (relative to the perfect
+    diffuser) at the aspecular angles -> (K, L). The specular Dirac of a smooth coat is
+    never seen at these geometries (γ ≠ 0)."""
+    w = as_wavelength_nm(wavelength_nm)
+    wi, wo = aspecular_directions(aspecular_deg, illumination_deg)
+    return np.pi * np.asarray(brdf(w, wi, wo), float)
+
+
+def _spectra_to_lab(w, R, illuminant, observer):
+    from nmmm.appearance.colorimetry import spectra_to_lab, spectra_to_xyz
+
+    return spectra_to_xyz(w, R, illuminant=illuminant, observer=observer), spectra_to_lab(
+        w, R, illuminant=illuminant, observer=observer)
+
+
+@dataclass(frozen=True)
+class MultiAngleColour:
+    """CIELAB at several aspecular angles (one row per angle)."""
+
+    aspecular_deg: np.ndarray
+    illumination_deg: float
+    wavelength_nm: np.ndarray
+    reflectance: np.ndarray  # (K, L) reflectance factors
+    xyz: np.ndarray  # (K, 3)
+    lab: np.ndarray  # (K, 3)
+    illuminant: str
+    observer: str
+    name: str = ""
+
+    @property
+    def L(self):
+        return self.lab[:, 0]
+
+    @property
+    def chroma(self):
+        return np.hypot(self.lab[:, 1], self.lab[:, 2])
+
+    @property
+    def hue_deg(self):
+        return np.degrees(np.arctan2(self.lab[:, 2], self.lab[:, 1])) % 360.0
+
+    def lightness_at(self, aspecular_deg: float) -> float:
+        """L* at one of the measured aspecular angles."""
+        k = np.flatnonzero(np.isclose(self.aspecular_deg, aspecular_deg))
+        if k.size == 0:
+            raise InvalidInputError(
+                f"aspecular angle {aspecular_deg}° was not measured; available: {self.aspecular_deg.tolist()}"
+            )
+        return float(self.lab[k[0], 0])
+
+    def flop_index(self, method: str = "Alman 1987") -> float:
+        return flop_index(self, method=method)
+
+    def table(self) -> list[dict]:
+        """Rows (aspecular_deg, L, a, b, C, h_deg) for reports/CSV."""
+        return [dict(aspecular_deg=float(g), L=float(l), a=float(a), b=float(b), C=float(c), h_deg=float(h))
+                for g, (l, a, b), c, h in zip(self.aspecular_deg, self.lab, self.chroma, self.hue_deg)]
+
+
+def multiangle_lab(brdf, wavelength_nm, aspecular_deg=ASTM_E2539_ASPECULAR_DEG, illumination_deg: float = 45.0,
+                   illuminant: str = "D65", observer: str = "10") -> MultiAngleColour:
+    """CIELAB of the paint at the aspecular angles (D65 / CIE 1964 10° by default, as
+    multi-angle instruments report), from :mod:`nmmm.appearance.colorimetry`.
+
+    L* above 100 is normal near the specular direction of effect paints (reflectance
+    factor > 1)."""
+    w = as_wavelength_nm(wavelength_nm)
+    g = np.atleast_1d(np.asarray(aspecular_deg, float))
+    R = multiangle_reflectance(brdf, w, g, illumination_deg)
+    xyz, lab = _spectra_to_lab(w, R, illuminant, observer)
+    return MultiAngleColour(g, float(illumination_deg), w, R, np.asarray(xyz), np.asarray(lab), illuminant,
+                            str(observer), getattr(brdf, "name", ""))
+
+
+# -- flop index -------------------------------------------------------------------------
+
+
+def flop_index_alman1987(L15, L45, L110):
+    """Flop index FI = 2.69 (L*15 − L*110)^1.11 / (L*45)^0.86 (Alman 1987; X-Rite, DuPont).
+
+    A solid colour has L*15 ≈ L*110 and FI ≈ 0; silver metallics reach 15–17. When
+    L*110 > L*15 (unusual, e.g. retro-reflecting finishes) the signed power is used, giving
+    a negative index.
+
+    >>> round(float(flop_index_alman1987(100.0, 50.0, 20.0)), 2)  # 2.69·80^1.11/50^0.86
+    12.05
+    """
+    L15, L45, L110 = (np.asarray(check_finite(v, n), float) for v, n in ((L15, "L15"), (L45, "L45"), (L110, "L110")))
+    if np.any(L45 <= 0):
+        raise InvalidInputError("L*45 must be > 0 for the flop index")
+    d = L15 - L110
+    return 2.69 * np.sign(d) * np.abs(d) ** 1.11 / L45 ** 0.86
+
+
+#: registry of flop-index formulas: name -> function(L15, L45, L110)
+FLOP_INDEX_METHODS = {"Alman 1987": flop_index_alman1987}
+
+
+def flop_index(colour_or_L15, L45=None, L110=None, method: str = "Alman 1987"):
+    """Flop index from a :class:`MultiAngleColour` (needs 15°, 45°, 110°) or from the three
+    lightnesses; ``method`` picks a formula in :data:`FLOP_INDEX_METHODS`."""
+    if method not in FLOP_INDEX_METHODS:
+        raise InvalidInputError(f"unknown flop index method {method!r}; choose among {list(FLOP_INDEX_METHODS)}")
+    if isinstance(colour_or_L15, MultiAngleColour):
+        c = colour_or_L15
+        return float(FLOP_INDEX_METHODS[method](c.lightness_at(15), c.lightness_at(45), c.lightness_at(110)))
+    if L45 is None or L110 is None:
+        raise InvalidInputError("give a MultiAngleColour or the three lightnesses L15, L45, L110")
+    return FLOP_INDEX_METHODS[method](colour_or_L15, L45, L110)
+
+
+# -- plots ------------------------------------------------------------------------------
+
+
+def plot_colour_travel(colours, path=None, title: str = "Colour travel"):
+    """Colour travel: a*b* trajectory over the aspecular angles (annotated), L* against
+    the aspecular angle and sRGB swatches per angle, for one or several
+    :class:`MultiAngleColour`. Saves to ``path`` (PNG) if given; returns the figure."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    from nmmm.appearance.colorimetry import white_point, xyz_to_srgb
+
+    if isinstance(colours, MultiAngleColour):
+        colours = [colours]
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.4), gridspec_kw={"width_ratios": [1.1, 1.1, 0.8]})
+    ax_ab, ax_l, ax_sw = axes
+    for k, c in enumerate(colours):
+        lab = c.lab
+        line, = ax_ab.plot(lab[:, 1], lab[:, 2], "o-", label=c.name or f"paint {k}")
+        for g, a, b in zip(c.aspecular_deg, lab[:, 1], lab[:, 2]):
+            ax_ab.annotate(f"{g:g}°", (a, b), textcoords="offset points", xytext=(4, 4), fontsize=7,
+                           color=line.get_color())
+        ax_l.plot(c.aspecular_deg, lab[:, 0], "o-", color=line.get_color(), label=c.name or f"paint {k}")
+        # swatches: display-referred sRGB, exposure so that the brightest angle fits
+        Y = np.clip(c.xyz[:, 1].max() / 100.0, 1e-6, None)
+        white = white_point(c.wavelength_nm, c.illuminant, c.observer)
+        rgb = np.clip(xyz_to_srgb(c.xyz / max(Y, 1.0), white_xyz=white), 0, 1)
+        for j, g in enumerate(c.aspecular_deg):
+            ax_sw.add_patch(plt.Rectangle((j, -k - 1), 0.95, 0.9, color=rgb[j]))
+            if k == 0:
+                ax_sw.text(j + 0.47, 0.1, f"{g:g}°", ha="center", fontsize=7)
+    ax_ab.axhline(0, color="0.8", lw=0.5)
+    ax_ab.axvline(0, color="0.8", lw=0.5)
+    ax_ab.set_xlabel("a*")
+    ax_ab.set_ylabel("b*")
+    ax_ab.set_title("a*b* trajectory")
+    ax_ab.legend(fontsize=7)
+    ax_l.set_xlabel("aspecular angle (deg)")
+    ax_l.set_ylabel("L*")
+    ax_l.set_title("lightness flop")
+    ax_sw.set_xlim(0, max(len(c.aspecular_deg) for c in colours))
+    ax_sw.set_ylim(-len(colours) - 0.2, 0.6)
+    ax_sw.set_axis_off()
+    ax_sw.set_title("sRGB swatches")
+    fig.suptitle(title)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
