@@ -15,7 +15,7 @@ A crystal cut with its optic axis c in the surface, measured twice: plane of inc
 ("parallel") and ⊥ c ("perpendicular"). In both orientations the principal axes coincide
 with the s, p frame, so the Jones matrix stays diagonal and (Ψ, Δ) are defined; r_s and r_p
 follow in closed form (:func:`nmmm.ellipsometry.forward.uniaxial_bulk_rho`, Azzam & Bashara
-§4.7). Each orientation's pseudo-dielectric function is, to first order, the permittivity along
+ch. 4). Each orientation's pseudo-dielectric function is, to first order, the permittivity along
 the in-plane direction of the plane of incidence (Aspnes 1980): ⟨ε⟩_∥ ≈ ε_e, ⟨ε⟩_⊥ ≈ ε_o. These
 start a Levenberg–Marquardt solution of the exact equations for the four unknowns
 (n_o, k_o, n_e, k_e) at every wavelength, vectorised across wavelengths
@@ -26,7 +26,7 @@ References
 ----------
 - D. E. Aspnes, "Approximate solution of ellipsometric equations for optically biaxial
   crystals", J. Opt. Soc. Am. 70, 1275 (1980), doi:10.1364/JOSA.70.001275.
-- R. M. A. Azzam, N. M. Bashara, *Ellipsometry and Polarized Light*, North-Holland (1977), §4.7.
+- R. M. A. Azzam, N. M. Bashara, *Ellipsometry and Polarized Light*, North-Holland (1977), ch. 4.
 - M. R. Querry, *Optical constants*, US Army CRDEC report CRDC-CR-85034 (1985) — hematite
   ordinary/extraordinary constants (database keys main/Fe2O3/Querry-o, -e).
 """

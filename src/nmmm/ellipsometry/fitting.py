@@ -20,10 +20,10 @@ parameters scaled by their typical size. At the optimum the covariance is
     C = (JᵀJ)⁻¹             (σ given: absolute uncertainties), or
     C = (JᵀJ)⁻¹ · χ²/(2N − M) (no σ in the data: unit weights, scaled by the reduced χ²),
 
-computed from the SVD of the weighted Jacobian J (Press et al., *Numerical Recipes*, §15.4–15.6;
-Fujiwara 2007, §5.5). Standard uncertainties are √diag C; the correlation is
+computed from the SVD of the weighted Jacobian J (Press et al., *Numerical Recipes*, ch. 15;
+Fujiwara 2007, ch. 5). Standard uncertainties are √diag C; the correlation is
 C_ij/√(C_ii C_jj). The fit reports the mean-squared error of J. A. Woollam's WVASE,
-MSE = √(χ²/(2N − M)) (Fujiwara 2007, eq. 5.56 with σ weights).
+MSE = √(χ²/(2N − M)) (Fujiwara 2007, ch. 5, with σ weights).
 
 A fit that did not converge (evaluation budget exhausted, non-finite model values) or whose
 parameters the data cannot determine (a singular Jacobian: a parameter without effect, or two
@@ -32,7 +32,7 @@ history and a diagnosis; it never returns silently wrong parameters.
 
 References
 ----------
-- H. Fujiwara, *Spectroscopic Ellipsometry: Principles and Applications*, Wiley (2007), §5.5.
+- H. Fujiwara, *Spectroscopic Ellipsometry: Principles and Applications*, Wiley (2007), ch. 5 (data analysis).
 - W. H. Press et al., *Numerical Recipes*, 3rd ed., Cambridge University Press (2007), ch. 15.
 - G. E. Jellison Jr., "Data analysis for spectroscopic ellipsometry", Thin Solid Films 234,
   416 (1993), doi:10.1016/0040-6090(93)90298-4 (uncertainties and correlations).

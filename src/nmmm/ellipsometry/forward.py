@@ -14,7 +14,7 @@ Public functions
 
 The convention for Δ
 --------------------
-The textbooks of ellipsometry (Azzam & Bashara; Fujiwara 2007, §2.4 and §3.4) write
+The textbooks of ellipsometry (Azzam & Bashara ch. 4; Fujiwara 2007, ch. 4) write
 
     ρ = tan Ψ · exp(iΔ)
 
@@ -28,16 +28,16 @@ coefficient is the complex conjugate of the textbook one, hence nmmm's ratio
     r_p / r_s = tan Ψ · exp(−iΔ),   i.e.   Ψ = arctan|r_p/r_s|,   Δ = −arg(r_p/r_s),
 
 gives exactly the Ψ and Δ an ellipsometer reports, with the properties above (r_p is
-defined so that r_p = −r_s at normal incidence, as in ``nmmm.layers`` and Fujiwara's
-eq. 2.61). Δ is returned in [0°, 360°). This is also pyElli's definition
+defined so that r_p = −r_s at normal incidence, as in ``nmmm.layers`` and Fujiwara
+2007, §2.3). Δ is returned in [0°, 360°). This is also pyElli's definition
 (``elli.Result.delta``: ρ = tan Ψ exp(−iΔ) with n + ik), against which the tests compare.
 
 References
 ----------
 - H. Fujiwara, *Spectroscopic Ellipsometry: Principles and Applications*, Wiley (2007),
-  §2.4 (Fresnel equations), §4.4 (Ψ and Δ), §5.1 (pseudo-dielectric function).
+  ch. 2 (Fresnel equations), ch. 4 (Ψ and Δ), ch. 5 (pseudo-dielectric function).
 - R. M. A. Azzam, N. M. Bashara, *Ellipsometry and Polarized Light*, North-Holland (1977),
-  §4.2 and §4.7 (uniaxial substrates).
+  ch. 4 (reflection ellipsometry, incl. uniaxial substrates).
 - D. E. Aspnes, "Approximate solution of ellipsometric equations for optically biaxial
   crystals", J. Opt. Soc. Am. 70, 1275 (1980), doi:10.1364/JOSA.70.001275.
 """
@@ -119,7 +119,7 @@ def bulk_rho(eps_substrate, angle_deg, eps_ambient=1.0):
     """r_p / r_s of a bare isotropic substrate (Fresnel, two media, nmmm's convention).
 
     r_s = (N0 cosθ0 − N1 cosθ1)/(N0 cosθ0 + N1 cosθ1),
-    r_p = (N1 cosθ0 − N0 cosθ1)/(N1 cosθ0 + N0 cosθ1)   (Fujiwara 2007, eqs. 2.60–2.61),
+    r_p = (N1 cosθ0 − N0 cosθ1)/(N1 cosθ0 + N0 cosθ1)   (Fujiwara 2007, §2.3),
 
     written with ε: N1 cosθ1 = sqrt(ε1 − ε0 sin²θ0), the root with non-negative imaginary part
     (a decaying wave for exp(−iωt)). Broadcasts over all arguments.
@@ -160,7 +160,7 @@ def uniaxial_bulk_rho(eps_ordinary, eps_extraordinary, angle_deg, orientation: s
     Notes
     -----
     With principal permittivities ε_x (in-plane, in the plane of incidence), ε_y (in-plane,
-    along s) and ε_z (normal), and ambient ε_0 (Azzam & Bashara §4.7; Lekner, *Theory of
+    along s) and ε_z (normal), and ambient ε_0 (Azzam & Bashara ch. 4; Lekner, *Theory of
     Reflection*, ch. 10):
 
         k_zs = sqrt(ε_y − ε_0 sin²θ),  k_zp = sqrt(ε_x (1 − ε_0 sin²θ / ε_z)),
@@ -228,6 +228,6 @@ def psi_delta(stack, wavelength_nm, angle_deg):
 
     References
     ----------
-    Fujiwara (2007), eq. 4.6 and §2.4.
+    Fujiwara (2007), ch. 4.
     """
     return psi_delta_from_rho(rho(stack, wavelength_nm, angle_deg))

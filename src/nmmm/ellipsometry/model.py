@@ -9,7 +9,7 @@ Public objects
 - :func:`dispersion_material` — a dispersion-model Material from a name and parameter values
   (``DISPERSION_PARAMETERS`` lists each model's parameters and units).
 - :func:`roughness_material` — the surface-roughness medium: Bruggeman 50/50 mixture of the
-  layer below and void (Fujiwara 2007, §5.4; Aspnes, Theeten, Hottier, Phys. Rev. B 20, 3292
+  layer below and void (Fujiwara 2007, ch. 5; Aspnes, Theeten, Hottier, Phys. Rev. B 20, 3292
   (1979)).
 
 Model file (TOML)
@@ -127,7 +127,7 @@ def dispersion_material(model: str, values: dict, name: str | None = None):
 
 def roughness_material(below, void=1.0, fraction_void: float = 0.5, name: str = "roughness"):
     """Surface roughness as an effective medium: Bruggeman mixture of the material below and
-    void (50/50 by default), the standard overlayer of ellipsometry (Fujiwara 2007, §5.4;
+    void (50/50 by default), the standard overlayer of ellipsometry (Fujiwara 2007, ch. 5;
     Aspnes, Theeten & Hottier 1979). Computed with :mod:`nmmm.ema`."""
     from nmmm.ema.bruggeman import bruggeman
     from nmmm.materials.material import DerivedMaterial, as_material

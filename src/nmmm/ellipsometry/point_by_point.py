@@ -18,21 +18,21 @@ At each wavelength λ_j the unknowns x_j = (n_j, k_j) minimise
 so one Levenberg–Marquardt iteration advances all of them at once: a single call of
 ``Stack.rt`` on every data point evaluates the model, finite differences in n and k (two more
 calls) give each wavelength's 2×2 normal matrix, and the damped steps are solved as a batch
-(Marquardt 1963; Press et al. 2007, §15.5.2). The start is the model's current material for
+(Marquardt 1963; Press et al. 2007, ch. 15). The start is the model's current material for
 that layer — typically a dispersion fit — which selects the physical branch among the
 multiple solutions of the ellipsometric equations for transparent films (Fujiwara 2007,
-§5.6). Uncertainties are √diag (JᵀJ)⁻¹ per wavelength (scaled by χ²_j/dof_j when the data
+ch. 5). Uncertainties are √diag (JᵀJ)⁻¹ per wavelength (scaled by χ²_j/dof_j when the data
 carry no σ and several angles give dof_j > 0).
 
 Point-by-point constants carry no causality constraint: :func:`kk_check` tests whether the
 inverted n and k are consistent with each other (Kramers–Kronig); a large deviation flags
-a wrong thickness or an inadequate model (Fujiwara 2007, §5.2.1).
+a wrong thickness or an inadequate model (Fujiwara 2007, ch. 5).
 
 References
 ----------
-- H. Fujiwara, *Spectroscopic Ellipsometry*, Wiley (2007), §5.2 (KK), §5.6 (direct inversion).
+- H. Fujiwara, *Spectroscopic Ellipsometry*, Wiley (2007), ch. 5 (KK relations, direct inversion).
 - D. W. Marquardt, J. Soc. Ind. Appl. Math. 11, 431 (1963), doi:10.1137/0111030.
-- W. H. Press et al., *Numerical Recipes*, 3rd ed. (2007), §15.5.
+- W. H. Press et al., *Numerical Recipes*, 3rd ed. (2007), ch. 15.
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ roughness make ⟨ε⟩ differ from the true ε: it is then a *pseudo* dielectri
 
 References
 ----------
-- H. Fujiwara, *Spectroscopic Ellipsometry: Principles and Applications*, Wiley (2007), §5.1,
+- H. Fujiwara, *Spectroscopic Ellipsometry: Principles and Applications*, Wiley (2007), ch. 5,
   eq. 5.3.
 - D. E. Aspnes, in *Handbook of Optical Constants of Solids*, ed. E. D. Palik, Academic Press
   (1985), p. 89.
