@@ -1,0 +1,90 @@
+"""Tests of nmmm.appearance.multiangle: geometries, CIELAB per angle, flop index.
+
+References: ASTM E2194 / E2539 geometry definitions (aspecular angle measured from the
+specular direction, positive towards the illuminator); the flop-index formula of Alman
+(1987), checked against hand-computed values; CIELAB of the perfect diffuser from
+colour-science.
+"""
+
+import numpy as np
+import pytest
+
+from nmmm.appearance.brdf import interference_paint, metallic_paint, opaque_paint
+from nmmm.appearance.multiangle import (
+    ASTM_E2194_ASPECULAR_DEG,
+    ASTM_E2539_ASPECULAR_DEG,
+    FLOP_INDEX_METHODS,
+    aspecular_directions,
+    flop_index,
+    flop_index_alman1987,
+    multiangle_lab,
+    plot_colour_travel,
+)
+from nmmm.errors import InvalidInputError
+
+W = np.arange(380.0, 781.0, 10.0)
+
+
+def test_standard_angle_sets():
+    assert ASTM_E2194_ASPECULAR_DEG == (15.0, 45.0, 110.0)
+    assert ASTM_E2539_ASPECULAR_DEG == (-15.0, 15.0, 25.0, 45.0, 75.0, 110.0)
+
+
+def test_aspecular_geometry():
+    wi, wo = aspecular_directions([0.0, 45.0, 110.0, -15.0], 45.0)
+    spec = np.array([-wi[0], -wi[1], wi[2]])
+    ang = np.degrees(np.arccos(np.clip(wo @ spec, -1, 1)))
+    assert np.allclose(ang, [0.0, 45.0, 110.0, 15.0])
+    assert np.allclose(wo[1], [0, 0, 1])  # 45° aspecular is the normal
+    assert wo[2, 0] > 0  # 110°: on the illuminator's side
+    assert wo[3, 0] < -np.sin(np.radians(45))  # −15°: beyond the specular direction
+    with pytest.raises(InvalidInputError, match="below the surface"):
+        aspecular_directions([140.0], 45.0)
+
+
+def test_flop_index_formula():
+    # hand computation: 2.69 * 80**1.11 / 50**0.86
+    assert np.isclose(flop_index_alman1987(100.0, 50.0, 20.0), 2.69 * 80 ** 1.11 / 50 ** 0.86)
+    assert flop_index_alman1987(50.0, 50.0, 50.0) == 0.0
+    assert flop_index(60.0, 50.0, 70.0) < 0
+    assert "Alman 1987" in FLOP_INDEX_METHODS
+    with pytest.raises(InvalidInputError):
+        flop_index(1.0, 2.0, 3.0, method="nope")
+
+
+def test_white_lambertian_diffuser_has_L_100_at_all_angles():
+    """A perfect diffuser (R = 1 at every angle) is L* = 100, a* = b* = 0."""
+
+    class Lambert:
+        name = "perfect diffuser"
+
+        def __call__(self, w, wi, wo):
+            return np.ones(np.shape(wo)[:-1] + (np.size(w),)) / np.pi
+
+    c = multiangle_lab(Lambert(), W)
+    assert np.allclose(c.lab, [100.0, 0.0, 0.0], atol=1e-6)
+    assert np.isclose(c.flop_index(), 0.0)
+
+
+def test_solid_paint_flop_near_zero():
+    red = opaque_paint((W, np.where(W > 600, 0.7, 0.08)))
+    c = multiangle_lab(red, W)
+    assert abs(c.flop_index()) < 1.0
+    assert np.ptp(c.L[1:]) < 3.0  # lightness almost independent of angle (15°..110°)
+
+
+def test_metallic_paint_has_a_large_flop_and_interference_paint_travels():
+    cm = multiangle_lab(metallic_paint(tilt=7.0, body_reflectance=0.1), W)
+    assert cm.flop_index() > 5.0
+    ci = multiangle_lab(interference_paint(), W)
+    assert np.ptp(ci.hue_deg[1:]) > 20.0  # hue changes with angle: colour travel
+    assert ci.lightness_at(15) > ci.lightness_at(110)
+    with pytest.raises(InvalidInputError, match="not measured"):
+        ci.lightness_at(33)
+
+
+def test_colour_travel_plot(tmp_path):
+    ci = multiangle_lab(interference_paint(), W)
+    p = tmp_path / "travel.png"
+    plot_colour_travel([ci, multiangle_lab(metallic_paint(), W)], p)
+    assert p.stat().st_size > 10_000
