@@ -91,3 +91,8 @@ def test_model_errors(tmp_path):
     p.write_text("substrate = [\n")
     with pytest.raises(DataFileError, match="TOML"):
         read_model(p)
+
+
+def test_fit_options_validated():
+    with pytest.raises(RecipeError, match=r"\[fit\]"):
+        EllipsometryModel.from_dict({"substrate": 1.5, "fit": {"wavelength_min": 300}})

@@ -39,9 +39,10 @@ A medium is a database key (``material = "main/Si/Green-2008"``, see
     B = {value = 0.005, min = -0.1, max = 0.2}
     C = 0
 
-    [fit]                              # optional
+    [fit]                              # optional: data window, evaluation budget
     wavelength_min_nm = 300
     wavelength_max_nm = 1000
+    max_nfev = 500
 
 Oscillator models take ``oscillators = [{amplitude_ev2 = ..., center_ev = ..., broadening_ev =
 ...}, ...]``; Sellmeier takes lists ``B = [...]``, ``C = [...]``. Parameter names are
@@ -287,6 +288,10 @@ class EllipsometryModel:
             raise RecipeError(f"unknown model key(s) {sorted(unknown)}; allowed: name, ambient, substrate, layers, fit")
         if "substrate" not in spec:
             raise RecipeError("the model needs a [substrate] (e.g. material = 'main/Si/Green-2008')")
+        fit_opts = spec.get("fit", {})
+        bad = set(fit_opts) - {"wavelength_min_nm", "wavelength_max_nm", "max_nfev"} if isinstance(fit_opts, dict) else {"?"}
+        if bad:
+            raise RecipeError(f"[fit] accepts wavelength_min_nm, wavelength_max_nm, max_nfev; got {sorted(bad)}")
         base = Path(base_dir) if base_dir is not None else None
         ambient = _Medium.from_spec("ambient", spec.get("ambient", 1.0), base)
         substrate = _Medium.from_spec("substrate", spec["substrate"], base)
