@@ -15,8 +15,9 @@ for which exactly one root has Im ε > 0 (Milton 1981: the Bruggeman ε is a Her
 function of the phase permittivities; checked by random sampling in the tests), and the root
 of the unperturbed polynomial nearest to it is returned. The result is continuous in
 wavelength, has Im ε >= 0 and, for lossless dielectrics, is the real root between the phases'
-permittivities. Two phases use the closed-form quadratic; more phases the eigenvalues of the
-batched companion matrices (no Python loop over wavelengths or fractions).
+permittivities. The roots of the regularised polynomial come from the Aberth–Ehrlich iteration, the chosen
+one is polished by Newton's method on the unperturbed polynomial; a Numba kernel runs this
+over all wavelengths and fractions (no Python loop).
 
 Spherical inclusions; the percolation threshold of a conducting phase is p = 1/3.
 
@@ -33,6 +34,7 @@ References
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from nmmm.ema._validation import as_eps, as_fraction, passive
@@ -66,53 +68,134 @@ def _phases(eps_phases, fractions):
     return eps, fr / fr.sum(-1, keepdims=True)
 
 
-def _quadratic_coefficients(e, f):
-    """2 ε² + b ε + c = 0 for two phases (e, f with last axis 2)."""
-    ea, eb = e[..., 0], e[..., 1]
-    fa = f[..., 0]
-    b = (2 - 3 * fa) * eb + (3 * fa - 1) * ea
-    return -b, -ea * eb  # 2ε² − bε − ea·eb = 0 written as 2ε² + (−b)ε + (−ea eb)
-
-
-def _quadratic_roots(e, f):
-    B, C = _quadratic_coefficients(e, f)
-    disc = np.sqrt(B * B - 8 * C)
-    return np.stack([(-B + disc) / 4, (-B - disc) / 4], axis=-1)
-
-
-def _poly_coefficients(e, f):
-    """Coefficients (highest degree first) of Σ_i f_i (e_i − ε) Π_{j≠i} (e_j + 2ε)."""
-    n = e.shape[-1]
-    coef = np.zeros(e.shape[:-1] + (n + 1,), dtype=complex)  # ascending powers
-    for i in range(n):  # loop over phases only (n is 2–5)
-        term = np.zeros_like(coef)
-        term[..., 0] = f[..., i] * e[..., i]
-        term[..., 1] = -f[..., i]
+@numba.njit(cache=True)
+def _poly_from_phases(e, f, out, term):
+    """Coefficients (ascending powers) of Σ_i f_i (e_i − ε) Π_{j≠i} (e_j + 2ε) into ``out``
+    (``term``: work array of the same size)."""
+    n = e.size
+    for k in range(n + 1):
+        out[k] = 0
+    for i in range(n):
+        for k in range(n + 1):
+            term[k] = 0
+        term[0] = f[i] * e[i]
+        term[1] = -f[i]
         deg = 1
         for j in range(n):
             if j == i:
                 continue
-            new = np.zeros_like(coef)
-            new[..., : deg + 1] += e[..., j, None] * term[..., : deg + 1]
-            new[..., 1 : deg + 2] += 2 * term[..., : deg + 1]
-            term, deg = new, deg + 1
-        coef += term
-    return coef[..., ::-1]
+            for k in range(deg + 1, 0, -1):  # multiply by (e_j + 2ε) in place
+                term[k] = e[j] * term[k] + 2 * term[k - 1]
+            term[0] = e[j] * term[0]
+            deg += 1
+        for k in range(n + 1):
+            out[k] += term[k]
 
 
-def _poly_roots(e, f):
-    c = _poly_coefficients(e, f)
-    n = c.shape[-1] - 1
-    lead = c[..., 0:1]
-    comp = np.zeros(c.shape[:-1] + (n, n), dtype=complex)
-    comp[..., 0, :] = -c[..., 1:] / lead
-    if n > 1:
-        comp[..., np.arange(1, n), np.arange(0, n - 1)] = 1.0
-    return np.linalg.eigvals(comp)
+@numba.njit(cache=True)
+def _horner(c, z):
+    """p(z) and p'(z) for ascending coefficients c."""
+    n = c.size - 1
+    p = c[n]
+    dp = 0j
+    for k in range(n - 1, -1, -1):
+        dp = dp * z + p
+        p = p * z + c[k]
+    return p, dp
 
 
-def _roots(e, f):
-    return _quadratic_roots(e, f) if e.shape[-1] == 2 else _poly_roots(e, f)
+@numba.njit(cache=True)
+def _aberth(c, z):
+    """All roots of the polynomial with ascending coefficients c (Aberth–Ehrlich), into z."""
+    n = c.size - 1
+    lead = c[n]
+    radius = 0.0
+    for k in range(n):
+        radius = max(radius, abs(c[k] / lead))
+    radius = 0.5 * (1.0 + radius)
+    for k in range(n):
+        z[k] = radius * np.exp(1j * (2 * np.pi * k / n + 0.4))
+    for _ in range(500):
+        converged = True
+        for k in range(n):
+            p, dp = _horner(c, z[k])
+            if p == 0:
+                continue
+            s = 0j
+            for j in range(n):
+                if j != k:
+                    s += 1.0 / (z[k] - z[j])
+            ratio = p / dp
+            step = ratio / (1.0 - ratio * s)
+            if not (np.isfinite(step.real) and np.isfinite(step.imag)):
+                step = 0j
+            z[k] -= step
+            if abs(step) > 1e-14 * max(abs(z[k]), 1e-300):
+                converged = False
+        if converged:
+            break
+
+
+@numba.njit(cache=True)
+def _bruggeman_kernel(e, f, delta, out):
+    """Physical Bruggeman root for each row of e, f (N, n): limiting absorption, then Newton
+    polishing on the unperturbed polynomial."""
+    N, n = e.shape
+    c = np.empty(n + 1, dtype=np.complex128)
+    cr = np.empty(n + 1, dtype=np.complex128)
+    z = np.empty(n, dtype=np.complex128)
+    er = np.empty(n, dtype=np.complex128)
+    work = np.empty(n + 1, dtype=np.complex128)
+    for r in range(N):
+        scale = 0.0
+        for i in range(n):
+            scale = max(scale, abs(e[r, i]))
+        if scale == 0:
+            scale = 1.0
+        for i in range(n):
+            er[i] = e[r, i] + 1j * delta * scale
+        _poly_from_phases(er, f[r], cr, work)
+        if n == 2:  # quadratic: closed form, the cancellation-free pair of roots
+            a2, a1, a0 = cr[2], cr[1], cr[0]
+            sq = np.sqrt(a1 * a1 - 4 * a2 * a0)
+            qq = -0.5 * (a1 + sq) if (a1.real * sq.real + a1.imag * sq.imag) >= 0 else -0.5 * (a1 - sq)
+            if qq == 0:
+                z[0] = 0j
+                z[1] = 0j
+            else:
+                z[0] = qq / a2
+                z[1] = a0 / qq
+        else:
+            _aberth(cr, z)
+        best = z[0]
+        for k in range(1, n):
+            if z[k].imag > best.imag:
+                best = z[k]
+        _poly_from_phases(e[r], f[r], c, work)
+        x = best
+        last = np.inf
+        for _ in range(60):
+            p, dp = _horner(c, x)
+            if dp == 0:
+                break
+            step = p / dp
+            size = abs(step)
+            if size >= last:  # round-off floor reached
+                break
+            x -= step
+            last = size
+            if size <= 1e-15 * abs(x):
+                break
+        # Newton can only wander off at a (near-)double root: keep the guide there
+        if abs(x - best) > 1e-3 * scale:
+            x = best
+        lossless = True
+        for i in range(n):
+            if e[r, i].imag != 0:
+                lossless = False
+        if lossless and abs(x.imag) <= 1e-12 * abs(x):
+            x = x.real + 0j  # a real root of a real polynomial: drop round-off
+        out[r] = x
 
 
 def bruggeman_residual(eps_effective, eps_phases, fractions) -> np.ndarray:
@@ -153,13 +236,12 @@ def bruggeman(eps_phases, fractions, fraction=None) -> np.ndarray:
     e, f = _phases(eps_phases, fractions)
     if e.shape[-1] == 1:
         return e[..., 0].copy()
-    scale = np.max(np.abs(e), axis=-1, keepdims=True)
-    scale = np.where(scale > 0, scale, 1.0)
-    guide = _roots(e + 1j * _DELTA * scale, f)
-    pick = np.take_along_axis(guide, np.argmax(guide.imag, axis=-1)[..., None], axis=-1)
-    roots = _roots(e, f)
-    nearest = np.argmin(np.abs(roots - pick), axis=-1)[..., None]
-    out = np.take_along_axis(roots, nearest, axis=-1)[..., 0]
+    shape = e.shape[:-1]
+    e2 = np.ascontiguousarray(e.reshape(-1, e.shape[-1]))
+    f2 = np.ascontiguousarray(f.reshape(-1, f.shape[-1]).astype(float))
+    out = np.empty(e2.shape[0], dtype=complex)
+    _bruggeman_kernel(e2, f2, _DELTA, out)
+    out = out.reshape(shape)
     return passive(out)
 
 
