@@ -26,19 +26,23 @@ from nmmm.spectra import check_fraction
 
 
 def _bruggeman(eps_inclusion, eps_host, fraction):
+    """Bruggeman symmetric medium of two phases (spheres), physical root."""
     return bruggeman(eps_inclusion, eps_host, fraction)
 
 
 def _looyenga(eps_inclusion, eps_host, fraction):
+    """Looyenga: cube roots of eps mix linearly (small contrast)."""
     return looyenga(eps_inclusion, eps_host, fraction)
 
 
 def _wiener_parallel(eps_inclusion, eps_host, fraction):
+    """Layers parallel to the field: the arithmetic mean (upper Wiener bound)."""
     f = check_fraction(fraction)
     return wiener_bounds([eps_inclusion, eps_host], [f, 1 - f])[1]
 
 
 def _wiener_series(eps_inclusion, eps_host, fraction):
+    """Layers across the field: the harmonic mean (lower Wiener bound)."""
     f = check_fraction(fraction)
     return wiener_bounds([eps_inclusion, eps_host], [f, 1 - f])[0]
 
