@@ -17,19 +17,16 @@ better than chance, the prediction is visually validated.
 Command line: ``nmmm experiment serve | stats | export``.
 """
 
-from nmmm.experiment.pairs import ExperimentSettings, PairSet, StimulusPair, load_pairs, make_pairs_file
-from nmmm.experiment.stats import (
-    analyse_responses,
-    binomial_test,
-    critical_count,
-    dprime_2afc,
-    format_report,
-    plot_analysis,
-    pooled_proportion,
-    proportion_ci,
-    tost_binomial,
-)
-from nmmm.experiment.storage import read_responses
+import importlib
+
+#: public name -> module (imported on first use: the web server needs neither SciPy nor matplotlib)
+_LAZY = {
+    "ExperimentSettings": "pairs", "PairSet": "pairs", "StimulusPair": "pairs", "load_pairs": "pairs",
+    "make_pairs_file": "pairs", "read_responses": "storage", "analyse_responses": "stats",
+    "binomial_test": "stats", "critical_count": "stats", "dprime_2afc": "stats", "format_report": "stats",
+    "plot_analysis": "stats", "pooled_proportion": "stats", "proportion_ci": "stats", "tost_binomial": "stats",
+    "create_app": "app",
+}
 
 __all__ = [
     "ExperimentSettings", "PairSet", "StimulusPair", "load_pairs", "make_pairs_file", "read_responses",
@@ -38,9 +35,11 @@ __all__ = [
 ]
 
 
-def __getattr__(name):  # the web stack is imported only when needed
-    if name == "create_app":
-        from nmmm.experiment.app import create_app
-
-        return create_app
+def __getattr__(name):
+    if name in _LAZY:
+        return getattr(importlib.import_module(f"nmmm.experiment.{_LAZY[name]}"), name)
     raise AttributeError(f"module 'nmmm.experiment' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(list(globals()) + list(_LAZY))

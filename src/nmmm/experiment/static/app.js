@@ -161,6 +161,7 @@ async function fetchImages(trial) {
 
 async function nextTrial() {
   state.accepting = false;
+  document.body.dataset.phase = "blank";
   $("stage").classList.remove("shown");
   show("trial");
   const blank = sleep(state.config.blank_ms);     // neutral blank interval
@@ -182,6 +183,7 @@ async function nextTrial() {
   requestAnimationFrame(() => {
     state.shownAt = performance.now();
     state.accepting = true;
+    document.body.dataset.phase = "awaiting-response";
   });
 }
 
@@ -189,6 +191,7 @@ async function respond(slot) {
   if (!state.accepting) return;
   state.accepting = false;
   const rt = performance.now() - state.shownAt;
+  document.body.dataset.phase = "sending";
   $("stage").classList.remove("shown");
   const pending = {
     session: state.session, response_id: uuid4(), trial_index: state.trial.trial_index,
