@@ -1,0 +1,574 @@
+"""Run a recipe: compounds -> levels (effective media) -> macro object -> spectra and colours.
+
+- :func:`compute` — a :class:`~nmmm.recipes.schema.Recipe` -> :class:`RunResult` (no files).
+- :func:`run_recipe` — load, compute and write everything into a folder: ``spectra.csv``,
+  ``results.nc`` (xarray, h5netcdf engine), ``colours.csv``, plots (PNG), images (PNG) and a
+  self-contained ``report.html``; returns the :class:`RunResult` with ``files`` filled in.
+- :func:`build_materials` — the recipe's compounds and level results as Materials.
+- :func:`scalar_results` — the flat numbers of a result (CIELAB per spectrum and
+  illuminant, …) used by sweeps and comparisons.
+
+Each physical step calls the public API of its package: :mod:`nmmm.materials` for the
+compounds, :func:`nmmm.ema.mix` or :func:`nmmm.homogenize.homogenize` for each level,
+:mod:`nmmm.layers.paint` (Mie + Kubelka–Munk / adding–doubling) for a paint film,
+:class:`nmmm.layers.Stack` for thin films, :func:`nmmm.ema.examples.plate_transmittance` for
+a plate, :class:`nmmm.appearance.brdf.PaintBRDF` for flake paints, and
+:mod:`nmmm.appearance.colorimetry` for CIELAB and sRGB.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from nmmm.errors import NmmmError, RecipeError
+from nmmm.recipes.schema import Recipe, load_recipe, read_toml, parse_recipe
+
+__all__ = ["RunResult", "compute", "run_recipe", "build_materials", "scalar_results", "write_outputs"]
+
+
+@dataclass
+class RunResult:
+    """Everything a run produced. Spectra are dimensionless (reflectance, transmittance or
+    reflectance factor), on ``wavelength_nm``."""
+
+    recipe: Recipe
+    recipe_text: str
+    wavelength_nm: np.ndarray
+    spectra: dict = field(default_factory=dict)        # label -> (L,) values, unit 1
+    primary: str = ""                                    # label of the main spectrum
+    materials: dict = field(default_factory=dict)      # compound -> (L,) complex n + ik
+    colours: list = field(default_factory=list)        # rows: spectrum, illuminant, L, a, b, C, h_deg, srgb
+    multiangle: list = field(default_factory=list)     # rows: aspecular_deg, L, a, b, C, h_deg
+    images: dict = field(default_factory=dict)         # name -> (H, W, 3) sRGB in [0, 1]
+    scalars: dict = field(default_factory=dict)        # name_with_unit -> float
+    notes: list = field(default_factory=list)
+    timings_s: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)          # kind -> path (after write_outputs)
+
+
+# --------------------------------------------------------------------------------------
+# compounds and levels
+
+
+def _compound_material(name, spec, base_dir):
+    from nmmm import materials as M
+
+    label = spec.label or name
+    if spec.database is not None:
+        return M.get(spec.database)
+    if spec.uniaxial is not None:
+        return M.uniaxial_mean(M.get(spec.uniaxial[0]), M.get(spec.uniaxial[1]), name=label)
+    if spec.model is not None:
+        params = dict(spec.params)
+        params.setdefault("name", label)
+        try:
+            return M.MODELS[spec.model](**params)
+        except TypeError as exc:
+            raise RecipeError(f"compounds.{name}.params: {exc}") from None
+    if spec.file is not None:
+        p = Path(spec.file)
+        if not p.is_absolute() and base_dir:
+            p = Path(base_dir) / p
+        if p.suffix.lower() in (".yml", ".yaml"):
+            return M.read_yaml(p, name=label)
+        return M.read_csv(p, name=label)
+    return M.Constant(nk=complex(spec.n, spec.k), name=label)
+
+
+def _shape(inc):
+    from nmmm.ema.shapes import Shape
+
+    if inc.shape == "sphere":
+        return Shape.sphere()
+    if inc.shape == "cube":
+        return Shape.cube()
+    if inc.shape == "spheroid":
+        return Shape.spheroid(inc.aspect_ratio)
+    return Shape.ellipsoid(*inc.semi_axes_nm)
+
+
+def _fft_level(lev, host, inc_mat, w):
+    from nmmm.homogenize import homogenize
+    from nmmm.microstructure import boolean_spheres, hardcore_spheres
+
+    ms = lev.microstructure
+    inc = lev.inclusions[0]
+    shape = (ms.size_px,) * ms.ndim
+    if ms.model == "hardcore":
+        cell = hardcore_spheres(shape, ms.voxel_nm, inc.radius_nm, inc.fraction, seed=ms.seed)
+    else:
+        cell = boolean_spheres(shape, ms.voxel_nm, inc.radius_nm, fraction=inc.fraction, seed=ms.seed)
+    lo, hi = float(w[0]), float(w[-1])
+    nodes = np.unique(np.r_[np.arange(lo, hi, lev.fft_step_nm), hi])
+    return homogenize(cell, {0: host, 1: inc_mat}, wavelength_nm=nodes, name=lev.name)
+
+
+def build_materials(recipe: Recipe, wavelength_nm=None) -> dict:
+    """Compounds and level results as :class:`~nmmm.materials.Material` objects, in
+    recipe order; a database key, file or model error is a :class:`RecipeError` naming the
+    compound's key."""
+    from nmmm.ema.mix import Inclusion, mix
+
+    w = _grid(recipe) if wavelength_nm is None else wavelength_nm
+    mats = {}
+    for name, spec in recipe.compounds.items():
+        try:
+            mats[name] = _compound_material(name, spec, recipe.base_dir)
+            mats[name].nk(w)
+        except RecipeError:
+            raise
+        except NmmmError as exc:
+            raise RecipeError(f"compounds.{name}: {exc}") from None
+    for i, lev in enumerate(recipe.levels):
+        try:
+            if lev.method == "fft":
+                mats[lev.name] = _fft_level(lev, mats[lev.host], mats[lev.inclusions[0].compound], w)
+            else:
+                incs = [Inclusion(mats[inc.compound], inc.fraction, _shape(inc), inc.radius_nm) for inc in lev.inclusions]
+                mats[lev.name] = mix(mats[lev.host], incs, method=lev.method, name=lev.name)
+            mats[lev.name].nk(w)
+        except NmmmError as exc:
+            raise RecipeError(f"levels[{i}] ({lev.name}): {exc}") from None
+    return mats
+
+
+def _grid(recipe):
+    s = recipe.spectral
+    n = int(round((s.stop_nm - s.start_nm) / s.step_nm))
+    w = s.start_nm + s.step_nm * np.arange(n + 1)
+    return w[w <= s.stop_nm + 1e-9]
+
+
+# --------------------------------------------------------------------------------------
+# macro objects
+
+
+def _film(recipe, mats, w, res):
+    from nmmm.layers.distributions import lognormal, monodisperse
+    from nmmm.layers.paint import PaintFilm, paint_reflectance
+
+    pg, f = recipe.pigment, recipe.film
+    d = pg.equivalent_diameter_nm()
+    dist = monodisperse(d) if pg.size_spread == 1.0 else lognormal(d, pg.size_spread, n_nodes=pg.size_nodes)
+    res.scalars["equivalent_diameter_nm"] = d
+
+    def film(rho):
+        try:
+            return PaintFilm(pigment=mats[pg.compound], binder=mats[recipe.binder.compound], distribution=dist,
+                             volume_fraction=pg.fraction, thickness_nm=f.thickness_nm, substrate_reflectance=rho,
+                             clear_coat_thickness_nm=f.clear_coat_nm, dependent_scattering=pg.dependent_scattering)
+        except NmmmError as exc:
+            raise RecipeError(f"film: {exc}") from None
+
+    r = paint_reflectance(film(f.substrate_reflectance), w, solver=f.solver, specular=f.specular, quad_pts=f.quad_pts)
+    label = f"reflectance (substrate {f.substrate_reflectance:g})"
+    res.spectra[label] = r.reflectance
+    res.primary = label
+    if f.substrate_reflectance > 0:
+        rb = paint_reflectance(film(0.0), w, solver=f.solver, specular=f.specular, quad_pts=f.quad_pts)
+        res.spectra["reflectance (black substrate)"] = rb.reflectance
+    res.notes.append(f"Paint film: {pg.compound} {pg.shape}s (equal-{pg.equivalent_sphere} sphere D = {d:.1f} nm, "
+                     f"geometric spread {pg.size_spread:g}) at volume fraction {pg.fraction:g} in {recipe.binder.compound}; "
+                     f"film {f.thickness_nm / 1e3:g} µm, clear coat {f.clear_coat_nm / 1e3:g} µm, solver {f.solver}, "
+                     f"0°/d, specular {f.specular}.")
+
+
+def _plate(recipe, mats, w, res):
+    from nmmm.ema.examples import plate_transmittance
+
+    p = recipe.plate
+    for name in (p.compound, p.reference_compound):
+        if name is None:
+            continue
+        nk = mats[name].nk(w)
+        for t in p.thickness_nm:
+            label = f"transmittance {name} ({t / 1e6:g} mm)"
+            res.spectra[label] = plate_transmittance(nk, w, t)
+            if not res.primary:
+                res.primary = label
+    res.notes.append("Plate in air, normal incidence, Beer–Lambert absorption (α = 4πk/λ) with incoherent "
+                     "Fresnel reflections at both faces.")
+
+
+def _thin_film(recipe, mats, w, res):
+    from nmmm.layers.thinfilm import Layer, Stack
+
+    tf = recipe.thin_film
+    med = (lambda n: 1.0 if n is None else mats[n])
+    stack = Stack([Layer(mats[l.compound], l.thickness_nm, coherent=l.coherent) for l in tf.layers],
+                  ambient=med(tf.ambient), substrate=med(tf.substrate))
+    R = np.asarray(stack.rt(w, np.asarray(tf.angles_deg, float)).R).reshape(w.size, len(tf.angles_deg))
+    for j, a in enumerate(tf.angles_deg):
+        label = f"reflectance ({a:g}° incidence)"
+        res.spectra[label] = R[:, j]
+        if not res.primary:
+            res.primary = label
+    res.notes.append("Layer stack by transfer matrices (coherent layers interfere; incoherent ones add "
+                     "intensities), unpolarized specular reflectance: "
+                     + " | ".join(f"{l.compound} {l.thickness_nm:g} nm{'' if l.coherent else ' (incoherent)'}"
+                                  for l in tf.layers) + ".")
+
+
+def _effect_brdf(recipe):
+    from nmmm.appearance.brdf import ClearCoat, PaintBRDF
+    from nmmm.appearance.flakes import FlakeLayer, aluminium_flakes, gaussian_tilt, mica_pigment
+
+    e = recipe.effect
+    optics = aluminium_flakes(e.aluminium_key) if e.flakes == "aluminium" else mica_pigment(e.tio2_thickness_nm, e.mica_thickness_nm)
+    return PaintBRDF(ClearCoat(e.coat_index, e.roughness), e.body_reflectance,
+                     FlakeLayer(optics, gaussian_tilt(e.tilt_deg), e.optical_depth), name=recipe.name)
+
+
+def _effect(recipe, mats, w, res):
+    from nmmm.appearance.colorimetry import spectra_to_lab
+
+    brdf = _effect_brdf(recipe)
+    v = recipe.viewing
+    g = np.asarray(v.aspecular_deg, float)
+    th_i = np.radians(v.illumination_deg)
+    th_v = np.radians(v.illumination_deg - g)
+    wi = np.stack([np.full_like(g, -np.sin(th_i)), np.zeros_like(g), np.full_like(g, np.cos(th_i))], axis=-1)
+    wo = np.stack([np.sin(th_v), np.zeros_like(g), np.cos(th_v)], axis=-1)
+    if np.any(np.abs(th_v) >= np.pi / 2):
+        raise RecipeError("viewing.aspecular_deg: a detector angle lies below the horizon "
+                          f"(illumination {v.illumination_deg:g}° − aspecular must be in (−90°, 90°))")
+    Rf = np.pi * np.asarray(brdf(w, wi, wo), float)
+    for j, a in enumerate(g):
+        label = f"reflectance factor (aspecular {a:g}°)"
+        res.spectra[label] = Rf[j]
+    res.primary = f"reflectance factor (aspecular {g[np.argmin(np.abs(g - 45))]:g}°)"
+    ill = recipe.lighting.illuminants[0]
+    lab = spectra_to_lab(w, Rf, illuminant=ill, observer=recipe.lighting.observer)
+    for a, (L, A, B) in zip(g, lab):
+        res.multiangle.append(dict(aspecular_deg=float(a), illuminant=ill, L=float(L), a=float(A), b=float(B),
+                                   C=float(np.hypot(A, B)), h_deg=float(np.degrees(np.arctan2(B, A)) % 360)))
+    Ls = {float(a): float(L) for a, L in zip(g, lab[:, 0])}
+    if all(k in Ls for k in (15.0, 45.0, 110.0)):
+        try:
+            from nmmm.appearance.multiangle import flop_index_alman1987
+
+            res.scalars["flop_index"] = float(flop_index_alman1987(Ls[15.0], Ls[45.0], Ls[110.0]))
+        except ImportError:
+            res.scalars["flop_index"] = float(2.69 * (Ls[15.0] - Ls[110.0]) ** 1.11 / Ls[45.0] ** 0.86)
+    res.notes.append(f"Flake paint BRDF ({recipe.effect.flakes} flakes, optical depth {recipe.effect.optical_depth:g}, "
+                     f"Gaussian tilt σ = {recipe.effect.tilt_deg:g}°, base reflectance {recipe.effect.body_reflectance:g}); "
+                     f"reflectance factors π f at {v.illumination_deg:g}° illumination, in the plane of incidence.")
+    if recipe.image is not None and recipe.outputs.images:
+        res.images.update(_stereo(recipe, brdf, w))
+
+
+def _stereo(recipe, brdf, w):
+    """Images of a flat plate seen by the left and right eye under a point light.
+
+    Each pixel is a point of the plate (z = 0); the eye and the light are points above
+    it. The pixel's value is the reflectance factor π f(λ, ωi, ωo) cos θi (r0/r)², r the
+    light's distance (r0 at the plate's centre), encoded in sRGB under the first
+    illuminant; the clear coat's mirror image of the point light is not drawn.
+    """
+    from nmmm.appearance.colorimetry import spectra_to_srgb
+
+    im = recipe.image
+    W, H = im.pixels
+    x = (np.arange(W) + 0.5) / W * im.plate_cm[0] - im.plate_cm[0] / 2
+    y = (np.arange(H) + 0.5) / H * im.plate_cm[1] - im.plate_cm[1] / 2
+    X, Y = np.meshgrid(x, y[::-1])
+    P = np.stack([X, Y, np.zeros_like(X)], axis=-1).reshape(-1, 3)
+    light = np.asarray(im.light_position_cm, float)
+    view_tilt = np.radians(30.0)
+    centre = np.array([0.0, -im.distance_cm * np.sin(view_tilt), im.distance_cm * np.cos(view_tilt)])
+    eyes = {"left eye": centre + [-im.eye_separation_cm / 2, 0, 0], "right eye": centre + [im.eye_separation_cm / 2, 0, 0]}
+    if not im.stereo:
+        eyes = {"view": centre}
+    li = light - P
+    r = np.linalg.norm(li, axis=-1, keepdims=True)
+    wi = li / r
+    r0 = np.linalg.norm(light)
+    out = {}
+    ill = recipe.lighting.illuminants[0]
+    for name, eye in eyes.items():
+        vo = eye - P
+        wo = vo / np.linalg.norm(vo, axis=-1, keepdims=True)
+        f = np.asarray(brdf(w, wi, wo), float)
+        val = np.pi * f * wi[:, 2:3] * (r0 / r) ** 2 * im.exposure
+        rgb = spectra_to_srgb(w, val, illuminant=ill)
+        out[name] = np.clip(np.asarray(rgb, float).reshape(H, W, 3), 0, 1)
+    return out
+
+
+_MACRO = {"film": _film, "plate": _plate, "thin_film": _thin_film, "effect": _effect}
+
+
+# --------------------------------------------------------------------------------------
+# compute
+
+
+def _colours(recipe, res):
+    from nmmm.appearance.colorimetry import spectra_to_lab, spectra_to_srgb
+
+    w = res.wavelength_nm
+    labels = list(res.spectra)
+    S = np.stack([res.spectra[k] for k in labels])
+    for ill in recipe.lighting.illuminants:
+        lab = spectra_to_lab(w, S, illuminant=ill, observer=recipe.lighting.observer)
+        rgb = np.clip(np.asarray(spectra_to_srgb(w, np.clip(S, 0, None), illuminant=ill, observer=recipe.lighting.observer)), 0, 1)
+        for k, (L, a, b), c in zip(labels, lab, rgb):
+            res.colours.append(dict(spectrum=k, illuminant=ill, L=float(L), a=float(a), b=float(b),
+                                    C=float(np.hypot(a, b)), h_deg=float(np.degrees(np.arctan2(b, a)) % 360),
+                                    srgb=[float(v) for v in c]))
+
+
+def compute(recipe: Recipe, recipe_text: str = "", progress: bool = True) -> RunResult:
+    """Run the physics of a validated recipe (no files written)."""
+    from tqdm import tqdm
+
+    w = _grid(recipe)
+    res = RunResult(recipe=recipe, recipe_text=recipe_text, wavelength_nm=w)
+    steps = ["compounds and levels", recipe.macro, "colours"]
+    bar = tqdm(steps, desc=recipe.name[:30], disable=not progress, leave=False, unit="step")
+    mats = None
+    for step in bar:
+        bar.set_postfix_str(step)
+        t0 = time.perf_counter()
+        if step == "compounds and levels":
+            mats = build_materials(recipe, w)
+            for k, m in mats.items():
+                res.materials[k] = np.asarray(m.nk(w))
+        elif step == "colours":
+            _colours(recipe, res)
+        else:
+            try:
+                _MACRO[step](recipe, mats, w, res)
+            except RecipeError:
+                raise
+            except NmmmError as exc:
+                raise RecipeError(f"{step}: {exc}") from None
+        res.timings_s[step] = time.perf_counter() - t0
+    res.scalars.update(scalar_results(res))
+    return res
+
+
+def scalar_results(res: RunResult) -> dict:
+    """Flat numbers: ``L``, ``a``, ``b`` of the primary spectrum under each illuminant
+    (``L_D65`` …), and the mean of the primary spectrum."""
+    out = {}
+    for row in res.colours:
+        if row["spectrum"] == res.primary:
+            for q in ("L", "a", "b"):
+                out[f"{q}_{row['illuminant']}"] = row[q]
+    if res.primary:
+        out["mean_primary"] = float(np.mean(res.spectra[res.primary]))
+    return out
+
+
+# --------------------------------------------------------------------------------------
+# files
+
+
+def _safe(label: str) -> str:
+    import re
+
+    return re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_")
+
+
+def write_outputs(res: RunResult, out_dir, report: bool = True) -> dict:
+    """Write CSV, NetCDF, plots, images and the HTML report of a result into ``out_dir``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    o = res.recipe.outputs
+    files = {}
+    w = res.wavelength_nm
+    labels = list(res.spectra)
+    if o.csv:
+        p = out / "spectra.csv"
+        with open(p, "w", newline="") as fh:
+            wr = csv.writer(fh)
+            wr.writerow(["wavelength_nm"] + [f"{k} [1]" for k in labels]
+                        + [f"{q} {m} [1]" for m in res.materials for q in ("n", "k")])
+            cols = [res.spectra[k] for k in labels] + [c for m in res.materials.values() for c in (m.real, m.imag)]
+            for i, wl in enumerate(w):
+                wr.writerow([f"{wl:g}"] + [f"{c[i]:.6g}" for c in cols])
+        files["spectra_csv"] = p
+        p = out / "colours.csv"
+        with open(p, "w", newline="") as fh:
+            wr = csv.writer(fh)
+            wr.writerow(["spectrum", "illuminant", "observer_deg", "L*", "a*", "b*", "C*ab", "h_ab_deg", "sRGB_R", "sRGB_G", "sRGB_B"])
+            for r in res.colours:
+                wr.writerow([r["spectrum"], r["illuminant"], res.recipe.lighting.observer] +
+                            [f"{r[q]:.4f}" for q in ("L", "a", "b", "C", "h_deg")] + [f"{v:.4f}" for v in r["srgb"]])
+            for r in res.multiangle:
+                wr.writerow([f"aspecular {r['aspecular_deg']:g} deg", r["illuminant"], res.recipe.lighting.observer] +
+                            [f"{r[q]:.4f}" for q in ("L", "a", "b", "C", "h_deg")] + ["", "", ""])
+        files["colours_csv"] = p
+    if o.netcdf:
+        files["netcdf"] = _write_netcdf(res, out / "results.nc")
+    if o.plots:
+        files.update(_plots(res, out))
+    if o.images and res.images:
+        from PIL import Image
+
+        for name, img in res.images.items():
+            p = out / f"image_{_safe(name)}.png"
+            Image.fromarray((np.clip(img, 0, 1) * 255 + 0.5).astype(np.uint8)).save(p)
+            files[f"image {name}"] = p
+        if len(res.images) == 2:
+            a, b = res.images.values()
+            gap = np.ones((a.shape[0], 8, 3))
+            p = out / "image_stereo_pair.png"
+            Image.fromarray((np.concatenate([a, gap, b], axis=1) * 255 + 0.5).astype(np.uint8)).save(p)
+            files["stereo pair"] = p
+    (out / "recipe.toml").write_text(res.recipe_text or "", encoding="utf-8")
+    files["recipe"] = out / "recipe.toml"
+    (out / "scalars.json").write_text(json.dumps(res.scalars, indent=2), encoding="utf-8")
+    res.files = {k: str(v) for k, v in files.items()}
+    if report and o.report:
+        from nmmm.recipes.report import result_section, write_report
+
+        p = write_report([result_section(res)], out / "report.html", title=res.recipe.name)
+        res.files["report"] = str(p)
+    return res.files
+
+
+def _write_netcdf(res, path):
+    import xarray as xr
+
+    w = res.wavelength_nm
+    labels = list(res.spectra)
+    ds = xr.Dataset(coords={"wavelength_nm": ("wavelength_nm", w, {"units": "nm"})})
+    if labels:
+        ds["spectra"] = (("spectrum", "wavelength_nm"), np.stack([res.spectra[k] for k in labels]),
+                         {"units": "1", "long_name": "reflectance / transmittance / reflectance factor"})
+        ds = ds.assign_coords(spectrum=labels)
+    if res.materials:
+        names = list(res.materials)
+        nk = np.stack([res.materials[k] for k in names])
+        ds = ds.assign_coords(compound=names)
+        ds["n"] = (("compound", "wavelength_nm"), nk.real, {"units": "1", "long_name": "refractive index"})
+        ds["k"] = (("compound", "wavelength_nm"), nk.imag, {"units": "1", "long_name": "extinction coefficient"})
+    ills = res.recipe.lighting.illuminants
+    if res.colours and labels:
+        lab = np.full((len(labels), len(ills), 3), np.nan)
+        for r in res.colours:
+            lab[labels.index(r["spectrum"]), ills.index(r["illuminant"])] = (r["L"], r["a"], r["b"])
+        ds = ds.assign_coords(illuminant=ills, cielab=["L*", "a*", "b*"])
+        ds["lab"] = (("spectrum", "illuminant", "cielab"), lab,
+                     {"units": "1", "long_name": f"CIELAB (CIE {res.recipe.lighting.observer} deg observer)"})
+    if res.multiangle:
+        ds = ds.assign_coords(aspecular_deg=("aspecular_deg", [r["aspecular_deg"] for r in res.multiangle], {"units": "degree"}))
+        ds["multiangle_lab"] = (("aspecular_deg", "cielab"), np.array([[r["L"], r["a"], r["b"]] for r in res.multiangle]),
+                                {"units": "1", "illuminant": res.multiangle[0]["illuminant"]})
+    ds.attrs.update({"title": res.recipe.name, "recipe": res.recipe_text or "", "source": "nmmm run"})
+    ds.to_netcdf(path, engine="h5netcdf")
+    return path
+
+
+def _plots(res, out):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    files = {}
+    w = res.wavelength_nm
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for k, v in res.spectra.items():
+        ax.plot(w, v, lw=2 if k == res.primary else 1.2, label=k)
+    ax.set_xlabel("wavelength (nm)")
+    ax.set_ylabel("reflectance / transmittance (1)")
+    ax.set_title(res.recipe.name)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    p = out / "spectra.png"
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    files["spectra plot"] = p
+    if res.materials:
+        fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6))
+        for k, nk in res.materials.items():
+            a1.plot(w, nk.real, label=k)
+            a2.plot(w, nk.imag, label=k)
+        a1.set_ylabel("n (1)")
+        a2.set_ylabel("k (1)")
+        a2.set_yscale("symlog", linthresh=1e-6)
+        for a in (a1, a2):
+            a.set_xlabel("wavelength (nm)")
+            a.grid(alpha=0.3)
+        a1.legend(fontsize=7)
+        fig.suptitle("Optical constants of the compounds and levels")
+        fig.tight_layout()
+        p = out / "nk.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        files["nk plot"] = p
+    if res.multiangle:
+        fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6))
+        g = [r["aspecular_deg"] for r in res.multiangle]
+        a1.plot(g, [r["L"] for r in res.multiangle], "o-")
+        a1.set_xlabel("aspecular angle (°)")
+        a1.set_ylabel("L* (1)")
+        a2.plot([r["a"] for r in res.multiangle], [r["b"] for r in res.multiangle], "o-")
+        for r in res.multiangle:
+            a2.annotate(f"{r['aspecular_deg']:g}°", (r["a"], r["b"]), fontsize=7)
+        a2.set_xlabel("a* (1)")
+        a2.set_ylabel("b* (1)")
+        for a in (a1, a2):
+            a.grid(alpha=0.3)
+        fig.suptitle(f"Multi-angle colour ({res.multiangle[0]['illuminant']})")
+        fig.tight_layout()
+        p = out / "multiangle.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        files["multiangle plot"] = p
+    return files
+
+
+def run_recipe(path_or_text, out_dir, progress: bool = True, report: bool = True) -> RunResult:
+    """Load a recipe (TOML path or text), compute it and write all outputs into ``out_dir``."""
+    raw, source, base = read_toml(path_or_text)
+    recipe = parse_recipe(raw, source, base)
+    text = Path(path_or_text).read_text(encoding="utf-8") if source else (
+        path_or_text if isinstance(path_or_text, str) else _dump_toml(raw))
+    res = compute(recipe, text, progress=progress)
+    write_outputs(res, out_dir, report=report)
+    return res
+
+
+def _dump_toml(raw: dict) -> str:
+    """A readable TOML-like echo of a raw recipe dict (for recipes built in code)."""
+    lines = []
+
+    def val(v):
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + " }"
+        return repr(v)
+
+    def table(prefix, d):
+        scal = {k: v for k, v in d.items() if not isinstance(v, dict) and not (isinstance(v, list) and v and isinstance(v[0], dict))}
+        if prefix:
+            lines.append(f"\n[{prefix}]")
+        for k, v in scal.items():
+            lines.append(f"{k} = {val(v)}")
+        for k, v in d.items():
+            name = f"{prefix}.{k}" if prefix else k
+            if isinstance(v, dict):
+                table(name, v)
+            elif isinstance(v, list) and v and isinstance(v[0], dict):
+                for item in v:
+                    lines.append(f"\n[[{name}]]")
+                    for kk, vv in item.items():
+                        lines.append(f"{kk} = {val(vv)}")
+
+    table("", raw)
+    return "\n".join(lines).strip() + "\n"

@@ -1,0 +1,594 @@
+"""The TOML recipe of a whole material, from its compounds to its images, and its validation.
+
+- :class:`Recipe` — the validated recipe (pydantic v2 models, unknown keys refused).
+- :func:`load_recipe` — a TOML file (or text, or dict) -> :class:`Recipe`; every problem is
+  an :class:`nmmm.errors.RecipeError` whose message starts with the offending key path,
+  e.g. ``pigment.fraction: must be in [0, 1] ...``.
+- :func:`example_recipes`, :func:`example_path` — the recipes shipped with the package
+  (the seed paper's worked examples).
+- :func:`set_key`, :func:`get_key` — read and write a dotted key in a raw recipe dict (used
+  by ``nmmm sweep --vary pigment.fraction=...``).
+
+A recipe has these tables (units in the key names; lengths nm, angles degrees, fractions in
+[0, 1]):
+
+``name``, ``description``
+``[spectral]``   ``start_nm``, ``stop_nm``, ``step_nm`` — the wavelength grid.
+``[compounds.NAME]`` exactly one source each: ``database`` (refractiveindex.info key),
+    ``uniaxial = [ordinary_key, extraordinary_key]`` (mean index), ``model`` (a name of
+    :data:`nmmm.materials.MODELS`) with ``params``, ``file`` (CSV or refractiveindex.info
+    YAML, relative to the recipe), or a constant ``n`` (and ``k``).
+``[[levels]]``   nano -> micro: each level mixes ``inclusions`` (compound, fraction, shape,
+    radius_nm) in a ``host`` by an effective-medium ``method`` (:mod:`nmmm.ema`) or by FFT
+    homogenization of a random ``microstructure`` (``method = "fft"``); its result is a new
+    compound named ``name``, usable by the next levels.
+``[pigment]`` + ``[binder]`` + ``[film]``   a pigmented paint film (Mie + radiative transfer,
+    :mod:`nmmm.layers.paint`), with clear coat and substrate.
+``[plate]``      a plate of one compound seen in transmission (gold-ruby glass).
+``[thin_film]``  a coherent/incoherent layer stack (interference pigments).
+``[effect]``     a flake (metallic / interference) paint BRDF (:mod:`nmmm.appearance.brdf`):
+    multi-angle colour and, with ``[image]``, a stereo pair of a plate.
+``[lighting]``   ``illuminants``, ``observer``; ``[viewing]`` ``illumination_deg``,
+    ``aspecular_deg``; ``[outputs]`` what to write.
+
+Exactly one of ``film``, ``plate``, ``thin_film``, ``effect`` is the macro object.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from nmmm.errors import RecipeError
+
+__all__ = [
+    "Recipe",
+    "load_recipe",
+    "parse_recipe",
+    "example_recipes",
+    "example_path",
+    "set_key",
+    "get_key",
+    "MACRO_OBJECTS",
+]
+
+#: the tables of which exactly one is the macro object of a recipe
+MACRO_OBJECTS = ("film", "plate", "thin_film", "effect")
+
+
+def _fraction(v: float) -> float:
+    if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 <= v <= 1.0):
+        raise ValueError(f"must be in [0, 1] (a volume fraction, not a percentage: 5 % is 0.05); got {v!r}")
+    return float(v)
+
+
+def _positive(v: float) -> float:
+    if not (isinstance(v, (int, float)) and v > 0 and not math.isnan(v)):
+        raise ValueError(f"must be > 0; got {v!r}")
+    return float(v)
+
+
+def _non_negative(v: float) -> float:
+    if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+        raise ValueError(f"must be a finite number >= 0; got {v!r}")
+    return float(v)
+
+
+def _angle(v: float) -> float:
+    if not (math.isfinite(v) and -90.0 < v < 90.0):
+        raise ValueError(f"must be an angle in degrees in (-90, 90); got {v!r}")
+    return float(v)
+
+
+def _aspecular(v: float) -> float:
+    if not (math.isfinite(v) and -90.0 < v < 180.0 and v != 0.0):
+        raise ValueError(f"must be an aspecular angle in degrees in (-90, 180), not 0 (the mirror); got {v!r}")
+    return float(v)
+
+
+Fraction = Annotated[float, AfterValidator(_fraction)]
+Positive = Annotated[float, AfterValidator(_positive)]
+NonNegative = Annotated[float, AfterValidator(_non_negative)]
+AngleDeg = Annotated[float, AfterValidator(_angle)]
+AspecularDeg = Annotated[float, AfterValidator(_aspecular)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Spectral(_Strict):
+    """The wavelength grid (nm), inclusive."""
+
+    start_nm: Positive = 380.0
+    stop_nm: Positive = 780.0
+    step_nm: Positive = 10.0
+
+    @model_validator(mode="after")
+    def _order(self):
+        if self.stop_nm <= self.start_nm:
+            raise ValueError(f"stop_nm ({self.stop_nm:g}) must exceed start_nm ({self.start_nm:g})")
+        if (self.stop_nm - self.start_nm) / self.step_nm > 5000:
+            raise ValueError("the grid would exceed 5000 wavelengths; increase step_nm")
+        return self
+
+
+class Compound(_Strict):
+    """One compound, known by its n + ik: exactly one source."""
+
+    database: str | None = None
+    uniaxial: list[str] | None = Field(default=None, min_length=2, max_length=2)
+    model: str | None = None
+    params: dict[str, Any] = Field(default_factory=dict)
+    file: str | None = None
+    n: Positive | None = None
+    k: NonNegative = 0.0
+    label: str | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        given = [s for s in ("database", "uniaxial", "model", "file", "n") if getattr(self, s) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of 'database', 'uniaxial', 'model' (with 'params'), 'file' "
+                             f"or a constant 'n' (and 'k'); got {given or 'none'}")
+        if self.params and self.model is None:
+            raise ValueError("'params' belongs to a dispersion 'model'")
+        if self.model is not None:
+            from nmmm.materials import MODELS
+
+            if self.model not in MODELS:
+                close = difflib.get_close_matches(self.model, list(MODELS), n=3)
+                raise ValueError(f"unknown dispersion model {self.model!r}; choose from {sorted(MODELS)}"
+                                 + (f" (did you mean {close[0]!r}?)" if close else ""))
+        return self
+
+
+class InclusionSpec(_Strict):
+    """A population of inclusions at one level."""
+
+    compound: str
+    fraction: Fraction
+    shape: Literal["sphere", "cube", "spheroid", "ellipsoid"] = "sphere"
+    aspect_ratio: Positive | None = None
+    semi_axes_nm: list[Positive] | None = Field(default=None, min_length=3, max_length=3)
+    radius_nm: Positive | None = None
+
+    @model_validator(mode="after")
+    def _shape_params(self):
+        if self.shape == "spheroid" and self.aspect_ratio is None:
+            raise ValueError("shape 'spheroid' needs aspect_ratio (polar / equatorial semi-axis)")
+        if self.shape == "ellipsoid" and self.semi_axes_nm is None:
+            raise ValueError("shape 'ellipsoid' needs semi_axes_nm = [a, b, c]")
+        return self
+
+
+class MicrostructureSpec(_Strict):
+    """A random periodic cell for FFT homogenization (:mod:`nmmm.microstructure`)."""
+
+    model: Literal["boolean", "hardcore"] = "hardcore"
+    size_px: int = Field(default=32, ge=8, le=256)
+    ndim: Literal[2, 3] = 3
+    voxel_nm: Positive = 2.0
+    seed: int = 0
+
+
+class Level(_Strict):
+    """One scale: inclusions in a host, homogenized into the compound ``name``."""
+
+    name: str
+    scale: Literal["nano", "micro", "meso"] = "nano"
+    host: str
+    inclusions: list[InclusionSpec] = Field(min_length=1)
+    method: str = "maxwell_garnett"
+    microstructure: MicrostructureSpec | None = None
+    fft_step_nm: Positive = 40.0
+
+    @model_validator(mode="after")
+    def _method(self):
+        if self.method == "fft":
+            if self.microstructure is None:
+                object.__setattr__(self, "microstructure", MicrostructureSpec())
+            if len(self.inclusions) != 1:
+                raise ValueError("method 'fft' takes one inclusion population (one particle phase)")
+            if self.inclusions[0].radius_nm is None:
+                raise ValueError("method 'fft' needs the inclusions' radius_nm (the particles of the cell)")
+        else:
+            from nmmm.ema.mix import MIX_METHODS
+            from nmmm.ema.registry import canonical_method
+
+            try:
+                m = canonical_method(self.method)
+            except Exception:
+                m = None
+            if m not in MIX_METHODS:
+                raise ValueError(f"unknown homogenization method {self.method!r}; choose 'fft' or one of {list(MIX_METHODS)}")
+        total = sum(i.fraction for i in self.inclusions)
+        if total > 1 + 1e-12:
+            raise ValueError(f"inclusion fractions sum to {total:g} > 1")
+        return self
+
+
+class Pigment(_Strict):
+    """Pigment particles of the paint film (equivalent spheres for Mie)."""
+
+    compound: str
+    fraction: Fraction
+    shape: Literal["sphere", "cube", "rod", "spheroid"] = "sphere"
+    diameter_nm: Positive | None = None
+    body_diagonal_nm: Positive | None = None
+    edge_nm: Positive | None = None
+    length_nm: Positive | None = None
+    polar_diameter_nm: Positive | None = None
+    equatorial_diameter_nm: Positive | None = None
+    equivalent_sphere: Literal["volume", "surface", "volume_to_surface"] = "volume"
+    size_spread: Annotated[float, Field(ge=1.0, le=3.0)] = 1.0
+    size_nodes: int = Field(default=24, ge=4, le=200)
+    dependent_scattering: bool = False
+
+    def dims(self) -> dict:
+        keys = ("diameter_nm", "body_diagonal_nm", "edge_nm", "length_nm", "polar_diameter_nm", "equatorial_diameter_nm")
+        return {k: getattr(self, k) for k in keys if getattr(self, k) is not None}
+
+    @model_validator(mode="after")
+    def _size(self):
+        from nmmm.layers.distributions import equivalent_sphere_diameter
+
+        try:
+            equivalent_sphere_diameter(self.shape, self.equivalent_sphere, **self.dims())
+        except Exception as exc:
+            raise ValueError(f"size of a {self.shape}: {exc}") from None
+        return self
+
+    def equivalent_diameter_nm(self) -> float:
+        from nmmm.layers.distributions import equivalent_sphere_diameter
+
+        return equivalent_sphere_diameter(self.shape, self.equivalent_sphere, **self.dims())
+
+
+class Binder(_Strict):
+    compound: str
+
+
+class Film(_Strict):
+    """The paint film and its stack: clear coat on top, substrate below (0°/d geometry)."""
+
+    thickness_nm: Positive = 20_000.0
+    clear_coat_nm: NonNegative = 0.0
+    substrate_reflectance: Fraction = 0.8
+    solver: Literal["km", "ad"] = "km"
+    specular: Literal["included", "excluded"] = "excluded"
+    quad_pts: int = Field(default=16, ge=4, le=64)
+
+
+class Plate(_Strict):
+    """A plate of one compound in air, normal incidence, seen in transmission."""
+
+    compound: str
+    thickness_nm: list[Positive] = Field(default_factory=lambda: [1e6], min_length=1)
+    reference_compound: str | None = None
+
+
+class LayerSpec(_Strict):
+    compound: str
+    thickness_nm: Positive
+    coherent: bool = True
+
+
+class ThinFilm(_Strict):
+    """A layer stack (coherent thin films and incoherent thick layers)."""
+
+    ambient: str | None = None
+    layers: list[LayerSpec] = Field(min_length=1)
+    substrate: str | None = None
+    angles_deg: list[AngleDeg] = Field(default_factory=lambda: [0.0], min_length=1)
+
+
+class Effect(_Strict):
+    """A flake paint: metallic (aluminium) or interference (TiO2-coated mica) flakes."""
+
+    flakes: Literal["aluminium", "mica"] = "aluminium"
+    aluminium_key: str = "main/Al/Rakic"
+    tio2_thickness_nm: Positive = 120.0
+    mica_thickness_nm: Positive = 350.0
+    optical_depth: Positive = 2.0
+    tilt_deg: Positive = 12.0
+    body_reflectance: Fraction = 0.3
+    coat_index: Annotated[float, Field(gt=1.0, lt=3.0)] = 1.5
+    roughness: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
+
+
+class Image(_Strict):
+    """A flat plate seen by two eyes at reading distance under a point light (stereo pair)."""
+
+    plate_cm: list[Positive] = Field(default_factory=lambda: [15.0, 10.0], min_length=2, max_length=2)
+    distance_cm: Positive = 40.0
+    eye_separation_cm: Positive = 6.5
+    light_position_cm: list[float] = Field(default_factory=lambda: [0.0, -25.0, 40.0], min_length=3, max_length=3)
+    pixels: list[int] = Field(default_factory=lambda: [150, 100], min_length=2, max_length=2)
+    stereo: bool = True
+    exposure: Positive = 1.0
+
+
+class Lighting(_Strict):
+    illuminants: list[str] = Field(default_factory=lambda: ["D65"], min_length=1)
+    observer: Literal["2", "10"] = "2"
+
+    @model_validator(mode="after")
+    def _known(self):
+        import colour
+
+        for i, name in enumerate(self.illuminants):
+            if name not in colour.SDS_ILLUMINANTS:
+                close = difflib.get_close_matches(name, list(colour.SDS_ILLUMINANTS), n=3)
+                raise ValueError(f"illuminants[{i}]: unknown illuminant {name!r}" + (f"; close: {close}" if close else ""))
+        return self
+
+
+class Viewing(_Strict):
+    illumination_deg: AngleDeg = 45.0
+    aspecular_deg: list[AspecularDeg] = Field(default_factory=lambda: [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0], min_length=1)
+
+
+class Outputs(_Strict):
+    csv: bool = True
+    netcdf: bool = True
+    plots: bool = True
+    images: bool = True
+    report: bool = True
+
+
+class Recipe(_Strict):
+    """A whole material, validated (see the module docstring)."""
+
+    name: str = "unnamed recipe"
+    description: str = ""
+    spectral: Spectral = Field(default_factory=Spectral)
+    compounds: dict[str, Compound] = Field(default_factory=dict)
+    levels: list[Level] = Field(default_factory=list)
+    pigment: Pigment | None = None
+    binder: Binder | None = None
+    film: Film | None = None
+    plate: Plate | None = None
+    thin_film: ThinFilm | None = None
+    effect: Effect | None = None
+    image: Image | None = None
+    lighting: Lighting = Field(default_factory=Lighting)
+    viewing: Viewing = Field(default_factory=Viewing)
+    outputs: Outputs = Field(default_factory=Outputs)
+    #: folder of the recipe file (relative 'file' paths), not part of the TOML
+    base_dir: str | None = None
+
+    @property
+    def macro(self) -> str:
+        return next(k for k in MACRO_OBJECTS if getattr(self, k) is not None)
+
+
+# --------------------------------------------------------------------------------------
+# errors
+
+_PYDANTIC_PREFIXES = ("Value error, ", "Assertion failed, ")
+
+
+def _loc(loc) -> str:
+    parts = []
+    for p in loc:
+        if isinstance(p, int):
+            parts.append(f"[{p}]")
+        elif str(p).startswith("function-after") or str(p) in ("constrained-float",):
+            continue
+        else:
+            parts.append(("." if parts else "") + str(p))
+    return "".join(parts) or "(top level)"
+
+
+def _fields_at(model, loc):
+    """Known field names of the model reached by ``loc`` (for 'did you mean')."""
+    cls = model
+    for p in loc[:-1]:
+        if isinstance(p, int) or cls is None:
+            continue
+        f = getattr(cls, "model_fields", {}).get(p)
+        if f is None:
+            if cls is Recipe and p:  # compounds.NAME
+                return list(Compound.model_fields)
+            return []
+        ann = f.annotation
+        cls = None
+        for cand in (ann, *getattr(ann, "__args__", ())):
+            for c in (cand, *getattr(cand, "__args__", ())):
+                if isinstance(c, type) and issubclass(c, BaseModel):
+                    cls = c
+                    break
+            if cls is not None:
+                break
+    return [k for k in getattr(cls, "model_fields", {}) if k != "base_dir"] if cls else []
+
+
+def _message(err) -> str:
+    msg = err["msg"]
+    for p in _PYDANTIC_PREFIXES:
+        if msg.startswith(p):
+            msg = msg[len(p):]
+    if err["type"] == "extra_forbidden":
+        known = _fields_at(Recipe, err["loc"])
+        close = difflib.get_close_matches(str(err["loc"][-1]), known, n=1)
+        msg = "unknown key" + (f" (did you mean {close[0]!r}?)" if close else "") + (
+            f"; known keys: {', '.join(known)}" if known else "")
+    elif err["type"] == "missing":
+        msg = "required key is missing"
+    return msg
+
+
+def _from_validation_error(exc: ValidationError, source: str) -> RecipeError:
+    lines = []
+    for err in exc.errors():
+        loc = _loc(err["loc"])
+        if err["type"] == "literal_error":
+            lines.append(f"{loc}: {err['msg']} (got {err['input']!r})")
+        else:
+            lines.append(f"{loc}: {_message(err)}")
+    head = lines[0]
+    more = "" if len(lines) == 1 else "\n" + "\n".join("  " + x for x in lines[1:])
+    return RecipeError(f"{head}{more}" + (f"  [in {source}]" if source else ""))
+
+
+# --------------------------------------------------------------------------------------
+# cross-references
+
+
+def _check_references(r: Recipe) -> None:
+    known = set(r.compounds)
+    for i, lev in enumerate(r.levels):
+        for key, name in [("host", lev.host)] + [(f"inclusions[{j}].compound", inc.compound)
+                                                   for j, inc in enumerate(lev.inclusions)]:
+            if name not in known:
+                raise RecipeError(f"levels[{i}].{key}: unknown compound {name!r}; defined so far: {sorted(known)} "
+                                  "(a level may use compounds and the results of earlier levels)")
+        if lev.name in known:
+            raise RecipeError(f"levels[{i}].name: {lev.name!r} is already a compound; give the level's result a new name")
+        known.add(lev.name)
+    macros = [k for k in MACRO_OBJECTS if getattr(r, k) is not None]
+    if len(macros) != 1:
+        raise RecipeError(f"(top level): give exactly one macro object among {list(MACRO_OBJECTS)}; got {macros or 'none'}")
+
+    def need(path, name):
+        if name is not None and name not in known:
+            close = difflib.get_close_matches(name, sorted(known), n=1)
+            raise RecipeError(f"{path}: unknown compound {name!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+                              + f"; known: {sorted(known)}")
+
+    if r.film is not None:
+        if r.pigment is None:
+            raise RecipeError("pigment: required key is missing (a [film] needs a [pigment] table)")
+        if r.binder is None:
+            raise RecipeError("binder: required key is missing (a [film] needs a [binder] table)")
+    if r.pigment is not None:
+        need("pigment.compound", r.pigment.compound)
+    if r.binder is not None:
+        need("binder.compound", r.binder.compound)
+    if r.plate is not None:
+        need("plate.compound", r.plate.compound)
+        need("plate.reference_compound", r.plate.reference_compound)
+    if r.thin_film is not None:
+        need("thin_film.ambient", r.thin_film.ambient)
+        need("thin_film.substrate", r.thin_film.substrate)
+        for j, lay in enumerate(r.thin_film.layers):
+            need(f"thin_film.layers[{j}].compound", lay.compound)
+    if r.image is not None and r.effect is None:
+        raise RecipeError("image: a stereo image needs an [effect] paint (flake BRDF)")
+    w0, w1 = r.spectral.start_nm, r.spectral.stop_nm
+    if w0 < 360 or w1 > 830:
+        raise RecipeError(f"spectral: colours need a grid inside 360–830 nm (the CIE tables); got {w0:g}–{w1:g} nm")
+
+
+# --------------------------------------------------------------------------------------
+# loading
+
+
+def parse_recipe(data: dict, source: str = "", base_dir=None) -> Recipe:
+    """Validate a raw recipe dict -> :class:`Recipe` (or raise :class:`RecipeError`)."""
+    if not isinstance(data, dict):
+        raise RecipeError(f"(top level): a recipe is a table of keys, got {type(data).__name__}")
+    data = dict(data)
+    if base_dir is not None:
+        data["base_dir"] = str(base_dir)
+    try:
+        r = Recipe.model_validate(data)
+    except ValidationError as exc:
+        raise _from_validation_error(exc, source) from None
+    _check_references(r)
+    return r
+
+
+def read_toml(path_or_text) -> tuple[dict, str, Path | None]:
+    """Raw dict of a TOML recipe (path, text, or dict) with its source name and folder."""
+    if isinstance(path_or_text, dict):
+        return copy.deepcopy(path_or_text), "", None
+    p = Path(path_or_text) if not (isinstance(path_or_text, str) and "\n" in path_or_text) else None
+    if p is not None:
+        if not p.exists():
+            raise RecipeError(f"(file): recipe file {str(p)!r} not found")
+        text, source, base = p.read_text(encoding="utf-8"), str(p), p.resolve().parent
+    else:
+        text, source, base = path_or_text, "", None
+    try:
+        return tomllib.loads(text), source, base
+    except tomllib.TOMLDecodeError as exc:
+        raise RecipeError(f"(TOML syntax): {exc}" + (f"  [in {source}]" if source else "")) from None
+
+
+def load_recipe(path_or_text) -> Recipe:
+    """Load and validate a recipe: a TOML file path, TOML text, or a raw dict."""
+    raw, source, base = read_toml(path_or_text)
+    return parse_recipe(raw, source, base)
+
+
+# --------------------------------------------------------------------------------------
+# dotted keys (sweeps)
+
+
+def get_key(raw: dict, dotted: str):
+    """Value at ``a.b.c`` (``levels[0].inclusions[1].fraction`` or ``levels.0...``)."""
+    cur = raw
+    for part in _split(dotted):
+        try:
+            cur = cur[part]
+        except (KeyError, IndexError, TypeError):
+            raise RecipeError(f"{dotted}: no such key in the recipe") from None
+    return cur
+
+
+def set_key(raw: dict, dotted: str, value) -> dict:
+    """A deep copy of ``raw`` with ``dotted`` set to ``value`` (missing tables are created)."""
+    out = copy.deepcopy(raw)
+    parts = _split(dotted)
+    cur = out
+    for part in parts[:-1]:
+        try:
+            cur = cur[part]
+        except KeyError:
+            cur[part] = {}
+            cur = cur[part]
+        except (IndexError, TypeError):
+            raise RecipeError(f"{dotted}: no such key in the recipe") from None
+    if isinstance(cur, list) and not isinstance(parts[-1], int):
+        raise RecipeError(f"{dotted}: no such key in the recipe")
+    cur[parts[-1]] = value
+    return out
+
+
+def _split(dotted: str) -> list:
+    parts = []
+    for tok in dotted.replace("[", ".").replace("]", "").split("."):
+        if tok == "":
+            continue
+        parts.append(int(tok) if tok.isdigit() else tok)
+    if not parts:
+        raise RecipeError(f"{dotted!r}: empty key")
+    return parts
+
+
+# --------------------------------------------------------------------------------------
+# shipped examples
+
+
+def example_path(name: str) -> Path:
+    """Path of a shipped example recipe (``"hematite_paint"`` or ``"hematite_paint.toml"``)."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    p = Path(str(resources.files("nmmm.recipes") / "examples" / f"{stem}.toml"))
+    if not p.exists():
+        raise RecipeError(f"(example): no shipped recipe {name!r}; available: {sorted(example_recipes())}")
+    return p
+
+
+def example_recipes() -> dict[str, Path]:
+    """Shipped example recipes: {stem: path}."""
+    folder = Path(str(resources.files("nmmm.recipes") / "examples"))
+    return {p.stem: p for p in sorted(folder.glob("*.toml"))}
