@@ -190,3 +190,29 @@ def test_thin_film_optics_validation():
         ThinFilmFlakeOptics(())
     with pytest.raises(InvalidInputError):
         mica_pigment(-10.0)
+
+
+def test_discrete_mean_independent_of_depth_distribution():
+    """Mean-field shadowing by the flakes above: the same total as the statistical lobe
+    whether flakes sit uniformly in depth or piled at the bottom (a deposit)."""
+    fl, paint = _setup(40000, tau=1.5, seed=7)
+    w = np.array([550.0])
+    wi = np.array([np.sin(np.radians(20)), 0, np.cos(np.radians(20))])
+    tot_uniform = flake_list_reflection(paint, fl, w, wi)[1].sum()
+    rng = np.random.default_rng(2)
+    piled = FlakeList(fl.positions_nm, 20e3 - 15e3 * rng.random(len(fl)) ** 3, fl.normals, fl.diameters_nm,
+                      fl.optics, fl.n_binder, fl.region_nm, tilt=fl.tilt)
+    tot_piled = flake_list_reflection(paint, piled, w, wi)[1].sum()
+    assert np.isclose(tot_piled, tot_uniform, rtol=0.01)
+
+
+def test_flake_list_from_microstructure_deposit():
+    from nmmm.microstructure import flake_deposit
+
+    d = flake_deposit(box_nm=(200e3, 200e3, 20e3), fraction=0.005, tilt_std_deg=6.0, seed=3)
+    fl = FlakeList.from_deposit(d, aluminium_flakes(), coat_thickness_nm=30e3)
+    assert len(fl) == len(d)
+    assert np.all(fl.depth_nm >= 30e3) and np.all(fl.depth_nm <= 50e3)
+    assert np.isclose(fl.optical_depth, np.sum(np.pi * d.diameters_nm ** 2 / 4) / (200e3 * 200e3))
+    layer = fl.to_flake_layer()
+    assert 0 < layer.tilt.mean_tilt_deg() < 20

@@ -985,8 +985,11 @@ def flake_list_reflection(paint: PaintBRDF, flakes: FlakeList, wavelength_nm, wi
     Returns ``(wo, power, escapes)``: the external mirror directions (N, 3), the fraction
     of the irradiance on the patch that each flake sends out (N, L) — coat transmission
     in and out, flake reflectance at its local angle, projected area, and mean-field
-    attenuation exp(−τ_e S ζ) by the flakes above (ζ the flake's relative depth in the
-    layer) — and the mask of flakes whose light leaves the coat.
+    attenuation exp(−S τ_above) by the flakes above it (τ_above the flake area above the
+    flake's depth per unit area, :meth:`FlakeList.optical_depth_above`; scaled by τ_e/τ
+    for semi-transparent flakes) — and the mask of flakes whose light leaves the coat.
+    Because Σ_k A_k exp(−S τ_above,k) / area → (1 − e^{−Sτ})/S whatever the depth
+    distribution, the mean of the discrete flakes is the statistical flake lobe.
     The average of these contributions over many flakes is the ``"flakes"`` term of the
     statistical BRDF built from ``flakes.to_flake_layer()``.
     """
@@ -1006,8 +1009,7 @@ def flake_list_reflection(paint: PaintBRDF, flakes: FlakeList, wavelength_nm, wi
     Ti = _lerp_table(tab.Tc, np.atleast_1d(_deg(wi[2])), tab.step)[0]
     To = _lerp_table(tab.Tc, _deg(np.clip(wo[:, 2], 0, 1)), tab.step)
     R, _ = flakes.optics.rt(np.clip(c, 1e-6, 1), tab.w, n)
-    top, bottom = flakes.layer_depth_nm
-    zeta = np.clip((flakes.depth_nm - top) / max(bottom - top, 1e-9), 0.0, 1.0)
+    tau_above = flakes.optical_depth_above()
     tilt = flakes.tilt
     if tilt is None:
         tilt = flakes.to_flake_layer().tilt
@@ -1017,13 +1019,12 @@ def flake_list_reflection(paint: PaintBRDF, flakes: FlakeList, wavelength_nm, wi
         a_tab = np.asarray(tilt.projected_mean(np.cos(np.radians(np.linspace(0.0, 90.0, _NT)))), float)
     opz = np.clip(op[:, 2], 1e-6, 1)
     S = _lerp1(a_tab, np.atleast_1d(_deg(ip[2])), tab.step)[0] / ip[2] + _lerp1(a_tab, _deg(opz), tab.step) / opz
-    tau = flakes.optical_depth
     if paint.flakes is not None:
         # τ_e/τ from the paint's tables (semi-transparent flakes)
         ratio = tab.tau_e / tab.tau if tab.tau > 0 else np.ones(tab.L)
     else:
         ratio = np.ones(tab.L)
-    att = np.exp(-np.outer(S * zeta, tau * ratio))
+    att = np.exp(-np.outer(S * tau_above, ratio))
     area = flakes.region_nm[0] * flakes.region_nm[1]
     power = (flakes.areas_nm2 * np.abs(c) / ip[2] / area)[:, None] * R * att * Ti * To
     power[~esc] = 0.0

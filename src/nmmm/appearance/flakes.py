@@ -476,8 +476,8 @@ class FlakeList:
     optics : the flake optics (:class:`MetalFlakeOptics` / :class:`ThinFilmFlakeOptics`).
     n_binder : real refractive index of the binder/clear coat around the flakes.
     region_nm : (width, height) of the patch, nm.
-    layer_depth_nm : (top, bottom) depths bounding the flake layer (for the mean-field
-        attenuation by the flakes above; defaults to the depth range of the flakes).
+    layer_depth_nm : (top, bottom) depths bounding the flake layer (informative; defaults
+        to the depth range of the flakes).
     tilt : the TiltDistribution they were drawn from, if known.
 
     ``centers_nm`` gives (N, 3) centres with z = −depth (z = 0 at the coat surface).
@@ -541,6 +541,17 @@ class FlakeList:
     def optical_depth(self) -> float:
         """τ = Σ flake area / patch area."""
         return float(self.areas_nm2.sum() / (self.region_nm[0] * self.region_nm[1]))
+
+    def optical_depth_above(self) -> np.ndarray:
+        """τ_above (N,): area of the flakes lying above each flake (smaller depth), plus
+        half its own, per unit area of the patch — the mean-field optical depth that light
+        crosses to reach it (statistical shadowing by the flakes above)."""
+        order = np.argsort(self.depth_nm, kind="stable")
+        a = self.areas_nm2[order]
+        cum = np.cumsum(a) - 0.5 * a
+        out = np.empty_like(cum)
+        out[order] = cum
+        return out / (self.region_nm[0] * self.region_nm[1])
 
     def to_flake_layer(self, tilt: TiltDistribution | None = None) -> FlakeLayer:
         """The statistical :class:`FlakeLayer` with the same optics and τ; the tilt
@@ -612,37 +623,55 @@ class FlakeList:
         return cls(pos, depth, tilt.sample(n, rng), dia, optics, n_binder, (w, h), (lo, hi), tilt)
 
     @classmethod
-    def from_deposit(cls, deposit, optics, n_binder: float = 1.5, tilt=None) -> "FlakeList":
-        """Adapt a flake deposit from :mod:`nmmm.microstructure` (or any object/dict with
-        ``positions``/``centers`` (nm), ``normals``, ``diameters`` and optionally
-        ``depth``/``region``): duck-typed so that the two packages stay independent."""
+    def from_deposit(cls, deposit, optics, n_binder: float = 1.5, tilt=None,
+                     coat_thickness_nm: float = 0.0) -> "FlakeList":
+        """Adapt a flake deposit from :func:`nmmm.microstructure.flake_deposit`
+        (:class:`~nmmm.microstructure.flakes.FlakeDeposit`: ``centres_nm`` with z the
+        height above the substrate, ``normals``, ``diameters_nm``, ``box_nm``) — or any
+        object/dict with centres/positions, normals, diameters and optionally depth and
+        region. Depths are measured from the top of the coat: the flake layer's top lies
+        ``coat_thickness_nm`` below it. Duck-typed so that the two packages stay
+        independent.
+        """
         def get(*names, default=None):
             for nm in names:
                 if isinstance(deposit, dict) and nm in deposit:
                     return deposit[nm]
-                if hasattr(deposit, nm):
+                if not isinstance(deposit, dict) and hasattr(deposit, nm):
                     return getattr(deposit, nm)
             return default
 
-        centers = get("centers_nm", "positions_nm", "centers", "positions")
+        centers = get("centres_nm", "centers_nm", "positions_nm", "centres", "centers", "positions")
         normals = get("normals", "normal")
         dia = get("diameters_nm", "diameters", "diameter_nm")
         if centers is None or normals is None or dia is None:
             raise InvalidInputError("deposit needs centres/positions, normals and diameters")
         centers = np.asarray(centers, float)
+        box = get("box_nm")
         depth = get("depth_nm", "depths_nm", "depth")
         if depth is None:
             if centers.shape[-1] != 3:
                 raise InvalidInputError("deposit has no depth and 2-D positions; give depth_nm")
             zc = centers[:, 2]
-            depth = np.abs(zc) if np.all(zc <= 0) else zc.max() - zc
-        region = get("region_nm", "size_nm", "box_nm", "region")
+            if box is not None:
+                depth = float(box[2]) - zc
+            else:
+                depth = np.abs(zc) if np.all(zc <= 0) else zc.max() - zc
+        depth = np.asarray(depth, float) + float(coat_thickness_nm)
+        region = get("region_nm", "size_nm", "region")
+        if region is None and box is not None:
+            region = box[:2]
         if region is None:
             region = (np.ptp(centers[:, 0]) or 1.0, np.ptp(centers[:, 1]) or 1.0)
         region = tuple(np.asarray(region, float).ravel()[:2])
+        layer = None
+        if box is not None:
+            layer = (float(coat_thickness_nm), float(coat_thickness_nm) + float(box[2]))
         dia = np.broadcast_to(np.asarray(dia, float), (centers.shape[0],)).copy()
-        return cls(centers[:, :2].copy(), np.asarray(depth, float), np.asarray(normals, float), dia,
-                   optics, n_binder, region, None, tilt)
+        thick = get("thicknesses_nm", "thickness_nm")
+        thick = float(np.mean(thick)) if thick is not None and np.size(thick) else 300.0
+        return cls(centers[:, :2].copy(), depth, np.asarray(normals, float), dia,
+                   optics, n_binder, region, layer, tilt, thick)
 
     def __repr__(self):
         return (f"<FlakeList {len(self)} flakes, tau={self.optical_depth:.3g}, "
