@@ -261,6 +261,33 @@ def gold_ruby_demo(output_dir) -> dict:
     plt.close(fig)
     figures.append(str(p))
 
+    # -- bounds in the complex plane (Bergman–Milton) at the plasmon wavelength -----------------
+    from nmmm.ema.bounds import bergman_milton_bounds
+    from nmmm.ema.bruggeman import bruggeman
+    from nmmm.ema.maxwell_garnett import maxwell_garnett
+
+    ea, es = gold.eps(peak_nm), silica.eps(peak_nm)
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    for i, f in enumerate((0.1, 0.3, 0.5)):
+        wi = bergman_milton_bounds(ea, es, f, kind="wiener")
+        hs = bergman_milton_bounds(ea, es, f)
+        ax.fill(wi.boundary.real, wi.boundary.imag, color=f"C{i}", alpha=0.12)
+        ax.fill(hs.boundary.real, hs.boundary.imag, color=f"C{i}", alpha=0.35, label=f"p = {f:g}")
+        mg, br = maxwell_garnett(ea, es, f), bruggeman(ea, es, f)
+        ax.plot(mg.real, mg.imag, "o", color=f"C{i}", mfc="white")
+        ax.plot(br.real, br.imag, "s", color=f"C{i}")
+    ax.plot([], [], "ko", mfc="white", label="Maxwell Garnett (gold in silica)")
+    ax.plot([], [], "ks", label="Bruggeman")
+    ax.set_xlabel("Re ε")
+    ax.set_ylabel("Im ε")
+    ax.set_title(f"Gold + silica at {peak_nm:.0f} nm: Wiener (light) and HS (dark) regions")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    p = out / "gold_silica_bounds.png"
+    fig.savefig(p, dpi=120)
+    plt.close(fig)
+    figures.append(str(p))
+
     # -- size correction (Doyle) ---------------------------------------------------------------
     size_rows = []
     w_s = np.arange(400.0, 701.0, 1.0)

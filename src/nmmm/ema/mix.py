@@ -152,7 +152,8 @@ def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = No
         if inc.shape.orientation == "aligned":
             raise InvalidInputError("aligned inclusions give an anisotropic medium: use mix_tensor "
                                     "(or Shape(..., orientation='random') for an isotropic mixture)")
-        if method in ("bruggeman", "looyenga", "maxwell_garnett_mie") and inc.shape != Shape.sphere():
+        is_sphere = inc.shape.kind == "ellipsoid" and np.allclose(inc.shape.depolarization, 1 / 3, atol=1e-9)
+        if method in ("bruggeman", "looyenga", "maxwell_garnett_mie") and not is_sphere:
             raise InvalidInputError(f"method {method!r} is for spheres; use method='maxwell_garnett' for "
                                     f"{inc.shape.name}")
         if method == "maxwell_garnett_mie" and inc.radius_nm is None:
