@@ -89,7 +89,7 @@ def test_aluminium_flake_reflectance_matches_tmm():
 
 def test_mica_flake_reflectance_and_transmittance_match_tmm():
     w = np.array([420.0, 520.0, 640.0])
-    fl = mica_pigment(110.0, 330.0)
+    fl = mica_pigment(110.0, 330.0, mica=1.58, mica_coherent=True)
     R, T = fl.rt(np.cos(np.radians([0.0, 30.0, 70.0])), w, 1.5)
     tio2 = fl.layers[0][0].nk(w)
     for i, th in enumerate((0.0, 30.0, 70.0)):
@@ -190,6 +190,15 @@ def test_thin_film_optics_validation():
         ThinFilmFlakeOptics(())
     with pytest.raises(InvalidInputError):
         mica_pigment(-10.0)
+
+
+def test_incoherent_mica_averages_the_mica_fringes():
+    """Incoherent mica ≈ the coherent result averaged over mica thickness."""
+    w = np.array([500.0, 600.0])
+    inc, _ = mica_pigment(120.0, 350.0, mica=1.58).rt(np.array([1.0]), w, 1.5)
+    coh = np.mean([mica_pigment(120.0, d, mica=1.58, mica_coherent=True).rt(np.array([1.0]), w, 1.5)[0]
+                   for d in np.linspace(200.0, 600.0, 401)], axis=0)
+    assert np.allclose(inc, coh, atol=0.01)
 
 
 def test_discrete_mean_independent_of_depth_distribution():

@@ -205,8 +205,9 @@ class MetalFlakeOptics:
 class ThinFilmFlakeOptics:
     """A flake made of thin films (top to bottom), embedded in the binder on both sides.
 
-    ``layers`` is a sequence of ``(material, thickness_nm)``; reflectance and
-    transmittance come from :func:`thin_film_rt` (Born & Wolf characteristic matrices).
+    ``layers`` is a sequence of ``(material, thickness_nm)`` or ``(material,
+    thickness_nm, coherent)``; reflectance and transmittance come from
+    :func:`thin_film_rt` (:class:`nmmm.layers.Stack`).
     Light transmitted through the flake continues in its direction (a parallel slab).
     """
 
@@ -216,7 +217,8 @@ class ThinFilmFlakeOptics:
     def __post_init__(self):
         if not self.layers:
             raise InvalidInputError("ThinFilmFlakeOptics needs at least one (material, thickness_nm) layer")
-        for mat, d in self.layers:
+        for layer in self.layers:
+            d = layer[1]
             if not (np.isfinite(d) and d > 0):
                 raise InvalidInputError(f"layer thickness_nm must be finite and > 0, got {d!r}")
 
@@ -233,24 +235,28 @@ def aluminium_flakes(key: str = "main/Al/Rakic") -> MetalFlakeOptics:
 
 
 def mica_pigment(tio2_thickness_nm: float = 120.0, mica_thickness_nm: float = 350.0,
-                 tio2="main/TiO2/Jolivet-anatase", mica=1.58) -> ThinFilmFlakeOptics:
+                 tio2=None, mica=None, mica_coherent: bool = False) -> ThinFilmFlakeOptics:
     """TiO2-coated mica interference flake: TiO2 / mica / TiO2 (Maile et al. 2005).
 
-    ``tio2`` a database key or Material (default anatase, Jolivet et al. 2023, which
-    covers 207–827 nm);
-    ``mica`` a Material or constant index (muscovite, n ≈ 1.58). The optical thickness of
-    the TiO2 layers sets the interference colour (about 120 nm: a blue-violet to green
-    colour travel at normal incidence; 60 nm: silver-white pearl).
+    Materials default to those of :mod:`nmmm.layers.interference`: anatase TiO2
+    (``main/TiO2/Jolivet-anatase``) and its muscovite model (n_D = 1.58). The mica is
+    incoherent by default (its thickness varies between platelets by more than λ/2n,
+    averaging its own fringes out); the TiO2 coatings are coherent and set the colour
+    (about 120 nm: blue–violet travelling to green; 60 nm: silver-white pearl).
     """
-    if isinstance(tio2, str):
+    from nmmm.layers.interference import DEFAULT_TIO2, muscovite
+
+    if tio2 is None or isinstance(tio2, str):
         from nmmm.materials import get
 
-        tio2 = get(tio2)
+        tio2 = get(tio2 or DEFAULT_TIO2)
+    mica = muscovite() if mica is None else mica
     for v, nm in ((tio2_thickness_nm, "tio2_thickness_nm"), (mica_thickness_nm, "mica_thickness_nm")):
         if not (np.isfinite(v) and v > 0):
             raise InvalidInputError(f"{nm} must be > 0 nm, got {v!r}")
     return ThinFilmFlakeOptics(
-        layers=((tio2, float(tio2_thickness_nm)), (mica, float(mica_thickness_nm)), (tio2, float(tio2_thickness_nm))),
+        layers=((tio2, float(tio2_thickness_nm)), (mica, float(mica_thickness_nm), bool(mica_coherent)),
+                (tio2, float(tio2_thickness_nm))),
         name=f"TiO2({tio2_thickness_nm:g} nm)/mica({mica_thickness_nm:g} nm)/TiO2",
     )
 
