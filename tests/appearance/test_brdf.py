@@ -262,3 +262,19 @@ def test_brdf_table_values_and_files(tmp_path):
         assert "specular_reflectance" in back
     pc = write_brdf_table(tmp_path / "t.csv", opaque_paint(0.5), W, n_theta_h=4, n_theta_d=4, n_phi_d=2)
     assert pc.read_text().splitlines()[0] == "theta_h_deg,theta_d_deg,wavelength_nm,brdf_per_sr"
+
+
+def test_solid_hematite_paint_from_layers_matches_saunderson_0_d():
+    """The BRDF of a layers.PaintFilm base, integrated over the hemisphere at normal
+    incidence, equals nmmm.layers' 0°/d Kubelka–Munk + Saunderson reflectance (its k2
+    from its own quadrature of the internal Fresnel reflectance)."""
+    from nmmm.appearance.brdf import opaque_paint_from_film
+    from nmmm.layers.distributions import lognormal
+    from nmmm.layers.examples import hematite
+    from nmmm.layers.paint import PaintFilm, paint_reflectance
+
+    w = np.arange(400.0, 701.0, 50.0)
+    film = PaintFilm(hematite(), 1.55, lognormal(150.0, 1.25, n_nodes=12), 0.07, 20e3, 0.8, 0.0)
+    b = opaque_paint_from_film(film, w)
+    ref = paint_reflectance(film, w, solver="km", specular="included").reflectance
+    assert np.allclose(hemispherical_albedo(b, _dir(0.0), w=w), ref, atol=1e-3)

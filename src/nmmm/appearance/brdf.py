@@ -64,6 +64,8 @@ Public objects
 - :class:`ClearCoat`, :class:`PaintBRDF`
 - :func:`clear_dielectric`, :func:`opaque_paint`, :func:`metallic_paint`,
   :func:`interference_paint`, :func:`grey_metallic_paint`
+- :func:`body_reflectance_from_film`, :func:`opaque_paint_from_film` — the base from a
+  :class:`nmmm.layers.paint.PaintFilm` (Mie + Kubelka–Munk, no surface correction)
 - :func:`ggx_distribution`, :func:`smith_g1_ggx`
 - :func:`flake_list_reflection`, :func:`binned_flake_brdf` — the discrete flakes'
   reflection, and the BRDF estimated from them on angular bins (statistical = mean of the
@@ -129,6 +131,8 @@ __all__ = [
     "metallic_paint",
     "interference_paint",
     "grey_metallic_paint",
+    "body_reflectance_from_film",
+    "opaque_paint_from_film",
     "ggx_distribution",
     "smith_g1_ggx",
     "flake_list_reflection",
@@ -944,6 +948,31 @@ def opaque_paint(body_reflectance, coat=1.5, roughness: float = 0.0, name: str =
     of internal reflectance ``body_reflectance`` (e.g. Kubelka–Munk R∞ from
     :mod:`nmmm.layers`)."""
     return PaintBRDF(ClearCoat(coat, roughness), body_reflectance, None, name=name)
+
+
+def body_reflectance_from_film(film, wavelength_nm, km_method: str = "gate"):
+    """Internal diffuse reflectance ρ(λ) of a pigmented film from :mod:`nmmm.layers`
+    (a :class:`nmmm.layers.paint.PaintFilm`): Mie → K, S (``km_method``, Gate 1974 by
+    default) → Kubelka's finite film over its substrate — **without** the Saunderson
+    surface correction, which :class:`PaintBRDF` applies itself through the coat.
+    Returns ``(wavelength_nm, ρ)`` ready for ``body_reflectance``. The film's clear-coat
+    absorption is not included (the BRDF's coat is non-absorbing)."""
+    from nmmm.layers.kubelka_munk import km_coefficients, km_reflectance
+    from nmmm.layers.paint import film_coefficients
+
+    w = as_wavelength_nm(np.atleast_1d(wavelength_nm)).ravel()
+    co = film_coefficients(film, w)
+    K, S = km_coefficients(co.mu_a_per_nm, co.mu_s_per_nm, co.g, method=km_method)
+    sub = np.broadcast_to(np.asarray(film.substrate_reflectance, dtype=float), w.shape)
+    thickness = film.thickness_nm if np.isfinite(film.thickness_nm) else 1e15
+    return w, np.clip(np.asarray(km_reflectance(K, S, thickness, sub), float), 0.0, 1.0)
+
+
+def opaque_paint_from_film(film, wavelength_nm, roughness: float = 0.0, name: str | None = None) -> PaintBRDF:
+    """A solid paint whose base is a :class:`nmmm.layers.paint.PaintFilm` (pigment, grain
+    size, fraction, thickness) and whose clear coat is the film's binder."""
+    w, rho = body_reflectance_from_film(film, wavelength_nm)
+    return PaintBRDF(ClearCoat(film.binder, roughness), (w, rho), None, name=name or "solid paint (layers film)")
 
 
 def metallic_paint(optical_depth: float = 1.5, tilt: TiltDistribution | float = 12.0, optics=None,
