@@ -17,7 +17,6 @@ from nmmm.experiment.stats import (
     dprime_2afc_counts,
     format_report,
     pc_from_dprime_2afc,
-    plot_analysis,
     pooled_cluster_robust,
     pooled_beta_binomial,
     pooled_equivalence,
@@ -187,9 +186,6 @@ def test_analyse_responses_and_report(tmp_path):
     assert {g.name for g in a.pairs} == {"a", "b"}
     text = format_report(a)
     assert "Pooled (cluster-robust" in text and "TOST" in text
-    fig = plot_analysis(a, tmp_path / "plot.png")
-    assert (tmp_path / "plot.png").stat().st_size > 10_000
-    assert fig is not None
     one = analyse_responses(_rows([15]))
     assert one.pooled.method == "naive"
     with pytest.raises(InvalidInputError, match="no responses"):

@@ -210,7 +210,8 @@ def _is_number(x) -> bool:
 
 def check_image(path, *, max_bytes: int = MAX_IMAGE_BYTES, max_pixels: int = MAX_IMAGE_PIXELS,
                 what: str = "image") -> tuple[int, int]:
-    """Check that ``path`` is a readable image of acceptable size; return ``(width, height)``.
+    """Check that ``path`` is a readable image of acceptable size; return ``(width, height)``
+    as displayed (after the EXIF orientation).
 
     Raises
     ------
@@ -236,9 +237,13 @@ def check_image(path, *, max_bytes: int = MAX_IMAGE_BYTES, max_pixels: int = MAX
                 raise DataFileError(f"{what} {str(path)!r} has {width}x{height} = {width * height} pixels; "
                                     f"at most {max_pixels} are accepted (downscale it)")
             im.verify()
+        with Image.open(path) as im:  # a camera's EXIF orientation: shown (and served) rotated
+            if im.getexif().get(0x0112, 1) in (5, 6, 7, 8):
+                width, height = height, width
     except DataFileError:
         raise
-    except (UnidentifiedImageError, Image.DecompressionBombError, OSError, SyntaxError, ValueError) as exc:
+    except (UnidentifiedImageError, Image.DecompressionBombError, OSError, SyntaxError, ValueError,
+            RuntimeError) as exc:
         raise DataFileError(f"{what} {str(path)!r} is not an image that can be read "
                             f"(expected PNG, JPEG, TIFF or WebP): {exc}") from None
     return width, height

@@ -75,6 +75,7 @@ def prepare_image(path, size: tuple[int, int]) -> bytes:
         raise DataFileError(f"image {str(path)!r} cannot be decoded: {exc}") from None
     if rgb.size != tuple(size):
         rgb = rgb.resize(tuple(size), Image.Resampling.LANCZOS, reducing_gap=3.0)
+    rgb.info = {}  # no ICC profile, EXIF or text chunks: the pixels are sRGB, the browser's default
     buf = io.BytesIO()
     rgb.save(buf, format="PNG", optimize=False, compress_level=6)
     return buf.getvalue()
