@@ -77,7 +77,10 @@ def _table(caption, rows) -> str:
         if len(rows) > 40:
             caption = f"{caption} (first 40 of {len(rows)} rows; full CSV written beside the report)"
             rows = rows[:40]
-    if isinstance(rows, dict):
+    if isinstance(rows, dict) and rows and all(isinstance(v, (list, tuple, np.ndarray)) for v in rows.values()) \
+            and len({len(v) for v in rows.values()}) == 1:  # columns -> rows
+        rows = [dict(zip(rows, vals)) for vals in zip(*rows.values())]
+    elif isinstance(rows, dict):
         rows = [{"quantity": k, "value": v} for k, v in rows.items()]
     if not isinstance(rows, list) or not rows or not isinstance(rows[0], dict):
         return f"<p><b>{html.escape(str(caption))}</b>: {_fmt(rows)}</p>"

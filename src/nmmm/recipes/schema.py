@@ -310,7 +310,7 @@ class Image(_Strict):
     plate_cm: list[Positive] = Field(default_factory=lambda: [15.0, 10.0], min_length=2, max_length=2)
     distance_cm: Positive = 40.0
     eye_separation_cm: Positive = 6.5
-    light_position_cm: list[float] = Field(default_factory=lambda: [0.0, -25.0, 40.0], min_length=3, max_length=3)
+    light_position_cm: list[float] = Field(default_factory=lambda: [0.0, 20.0, 35.0], min_length=3, max_length=3)
     pixels: list[int] = Field(default_factory=lambda: [150, 100], min_length=2, max_length=2)
     stereo: bool = True
     exposure: Positive = 1.0

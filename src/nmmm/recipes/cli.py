@@ -1,0 +1,114 @@
+"""Click commands ``nmmm run``, ``nmmm demo``, ``nmmm compare`` and ``nmmm sweep``
+(mapped from :mod:`nmmm.cli`)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from nmmm.errors import NmmmError
+
+
+def _recipe_path(value: str) -> str:
+    """A recipe path, or the name of a shipped example (``hematite_paint``)."""
+    if Path(value).exists():
+        return value
+    from nmmm.recipes.schema import example_recipes
+
+    ex = example_recipes()
+    stem = value[:-5] if value.endswith(".toml") else value
+    if stem in ex:
+        return str(ex[stem])
+    raise click.BadParameter(f"no file {value!r} and no shipped example of that name "
+                             f"(shipped: {', '.join(sorted(ex))})")
+
+
+@click.command("run")
+@click.argument("recipe")
+@click.option("-o", "--output", "output", default=None, help="Output folder (default: out-<recipe name>).")
+@click.option("--no-progress", is_flag=True, help="Hide progress bars.")
+def run(recipe, output, no_progress):
+    """Run a TOML RECIPE (a path, or a shipped example's name) into an output folder:
+    spectra (CSV, NetCDF), CIELAB colours, plots, images and report.html."""
+    from nmmm.recipes.run import run_recipe
+
+    path = _recipe_path(recipe)
+    out = Path(output or f"out-{Path(path).stem}")
+    try:
+        res = run_recipe(path, out, progress=not no_progress)
+    except NmmmError as exc:
+        raise click.ClickException(str(exc)) from None
+    for row in res.colours:
+        if row["spectrum"] == res.primary:
+            click.echo(f"{res.primary} under {row['illuminant']}: L* = {row['L']:.2f}, a* = {row['a']:.2f}, b* = {row['b']:.2f}")
+    click.echo(f"report: {Path(res.files['report']).resolve()}" if "report" in res.files else f"outputs in {out.resolve()}")
+
+
+@click.command("demo")
+@click.option("-o", "--output", "output", default="nmmm-demo", show_default=True, help="Output folder.")
+@click.option("--quick", is_flag=True, help="Only the shipped recipes (skip the packages' demo hooks).")
+@click.option("--only", multiple=True, help="Run only sections whose name contains this text (repeatable).")
+@click.option("--no-progress", is_flag=True, help="Hide progress messages.")
+def demo(output, quick, only, no_progress):
+    """Run the seed paper's worked examples into one HTML report."""
+    from nmmm.recipes.demo import run_demo
+
+    report, failed, skipped = run_demo(output, quick=quick, only=only or None, progress=not no_progress)
+    click.echo(f"report: {Path(report).resolve()}")
+    if skipped:
+        click.echo("not available: " + ", ".join(skipped))
+    if failed:
+        click.echo(f"{len(failed)} section(s) failed: " + "; ".join(failed), err=True)
+        sys.exit(1)
+
+
+@click.command("compare")
+@click.argument("recipe_a")
+@click.argument("recipe_b")
+@click.option("-i", "--illuminant", "illuminants", multiple=True, help="Illuminant (repeatable; default: recipe A's).")
+@click.option("-o", "--output", "output", default="nmmm-compare", show_default=True, help="Output folder.")
+@click.option("--no-progress", is_flag=True)
+def compare(recipe_a, recipe_b, illuminants, output, no_progress):
+    """Compare two recipes (substitution view): ΔE2000 under each illuminant, spectra
+    overlaid, images side by side."""
+    from nmmm.recipes.compare import compare_recipes
+
+    try:
+        r = compare_recipes(_recipe_path(recipe_a), _recipe_path(recipe_b), output, list(illuminants) or None,
+                            progress=not no_progress)
+    except NmmmError as exc:
+        raise click.ClickException(str(exc)) from None
+    for row in r["rows"]:
+        click.echo(f"{row['geometry']}, {row['illuminant']}: dE00 = {row['dE00']:.3f}  "
+                   f"(A: L* {row['L_A']:.2f} a* {row['a_A']:.2f} b* {row['b_A']:.2f}; "
+                   f"B: L* {row['L_B']:.2f} a* {row['a_B']:.2f} b* {row['b_B']:.2f})")
+    click.echo(f"report: {Path(r['report']).resolve()}")
+
+
+@click.command("sweep")
+@click.argument("recipe")
+@click.option("--vary", "varies", multiple=True, required=True,
+              help="KEY=START:STOP:NUM or KEY=V1,V2,... (repeatable; the grid is their product).")
+@click.option("--scheduler", default=None, help="Address of a running Dask scheduler (tcp://HOST:8786); "
+              "default: a local cluster of worker processes.")
+@click.option("-n", "--workers", "n_workers", default=2, show_default=True, help="Worker processes of the local cluster.")
+@click.option("--serial", is_flag=True, help="Compute in this process, without Dask.")
+@click.option("-o", "--output", "output", default=None, help="Sweep folder (reused to resume; default sweep-<recipe>).")
+@click.option("--no-progress", is_flag=True)
+def sweep(recipe, varies, scheduler, n_workers, serial, output, no_progress):
+    """Sweep a recipe over a parameter grid on Dask; one Parquet file per finished point,
+    and a rerun resumes where it stopped."""
+    from nmmm.recipes.sweep import sweep as run_sweep
+
+    path = _recipe_path(recipe)
+    out = Path(output or f"sweep-{Path(path).stem}")
+    try:
+        s = run_sweep(path, list(varies), out, scheduler=scheduler, n_workers=n_workers, serial=serial,
+                      progress=not no_progress)
+    except NmmmError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"{s['n_points']} points: {s['n_computed']} computed, {s['n_skipped']} already done; "
+               f"{s['wall_s']:.1f} s wall, {s['physics_s']:.1f} s of physics")
+    click.echo(f"results: {(out / 'results.parquet').resolve()} (and results.csv, points/*.parquet)")
