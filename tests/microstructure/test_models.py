@@ -112,6 +112,18 @@ def test_bad_inputs():
         M.Microstructure(np.zeros((4, 4)) + 0.5, 1.0)
 
 
+
+@pytest.mark.parametrize("box", [(-100.0, 100.0), (100.0, float("nan")), (100.0,), (0.0, 100.0, 100.0)])
+def test_bad_cell_sizes_are_named(box):
+    for make in (
+        lambda: M.boolean_particles(box, "sphere", 3.0, fraction=0.1, seed=0),
+        lambda: M.hardcore_particles(box, "sphere", 3.0, 0.1, seed=0),
+        lambda: M.aggregate_particles(box, 3.0, 10.0, 4, 0.1, seed=0),
+    ):
+        with pytest.raises(InvalidInputError, match="box_nm must hold 2 or 3 positive lengths"):
+            make()
+
+
 def test_anisotropic_voxels_and_section():
     m = M.boolean_spheres((40, 40, 80), (2.0, 2.0, 1.0), 6.0, fraction=0.2, seed=4)
     assert m.voxel_nm == (2.0, 2.0, 1.0)

@@ -23,15 +23,14 @@ References
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.microstructure.base import Microstructure, as_size_distribution, random_rotations
+from nmmm.microstructure.base import Microstructure, as_box_nm, as_size_distribution, seed_param
 from nmmm.microstructure.boolean import cell_box_nm
-from nmmm.microstructure.hardcore import pseudocube_half_size, rsa_centres
-from nmmm.microstructure.particles import SHAPES, ParticleSet, superball_volume
+from nmmm.microstructure.hardcore import grain_geometry, rsa_centres, unit_grain_geometry
+from nmmm.microstructure.particles import ParticleSet
 from nmmm.spectra import check_fraction, check_positive
 
 __all__ = ["aggregate_particles", "aggregates"]
@@ -68,7 +67,7 @@ def aggregate_particles(
     hardcore_aggregates : bool
         Aggregates placed by RSA (no interpenetration) or as a Poisson process.
     """
-    box = tuple(float(b) for b in box_nm)
+    box = as_box_nm(box_nm)
     ndim = len(box)
     p = float(check_fraction(fraction))
     mu = float(check_positive(particles_per_aggregate, "particles_per_aggregate"))
@@ -78,11 +77,7 @@ def aggregate_particles(
     adist = as_size_distribution(aggregate_radius_nm, "aggregate_radius_nm")
     if shape not in ("sphere", "pseudocube"):
         raise InvalidInputError(f"shape must be 'sphere' or 'pseudocube', got {shape!r}")
-    if shape == "sphere":
-        vol_unit, circ_unit = (math.pi if ndim == 2 else 4 / 3 * math.pi), 1.0
-    else:
-        a = pseudocube_half_size(1.0, exponent, ndim)
-        vol_unit, circ_unit = float(superball_volume(np.array([a, a, a]), exponent, ndim)), 0.5
+    vol_unit, circ_unit = unit_grain_geometry(shape, exponent, ndim)
     rng = np.random.default_rng(seed)
     vcell = float(np.prod(box))
     n_agg = int(rng.poisson(p * vcell / (mu * vol_unit * pdist.moment(ndim))))
@@ -107,16 +102,7 @@ def aggregate_particles(
     if periodic:
         c[:, :ndim] = np.mod(c[:, :ndim], np.array(box))
     sizes = pdist.sample(rng, n)
-    half = np.empty((n, 3))
-    if shape == "sphere":
-        rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
-        half[:] = sizes[:, None]
-        kinds, expo = np.full(n, SHAPES["superball"]), np.full(n, 2.0)
-    else:
-        rot = random_rotations(rng, n, ndim)
-        half[:] = (sizes * pseudocube_half_size(1.0, exponent, ndim))[:, None]
-        kinds = np.full(n, SHAPES["box"] if math.isinf(exponent) else SHAPES["superball"])
-        expo = np.full(n, float(exponent))
+    rot, half, kinds, expo = grain_geometry(rng, sizes, shape, exponent, ndim)
     params = {
         "model": "aggregates",
         "shape": shape,
@@ -126,7 +112,7 @@ def aggregate_particles(
         "n_aggregates": n_agg,
         "nominal_fraction": p,
         "hardcore_aggregates": bool(hardcore_aggregates),
-        "seed": seed if isinstance(seed, (int, type(None))) else "generator",
+        "seed": seed_param(seed),
         "box_nm": list(box),
     }
     return ParticleSet(c, rot, half, kinds, expo, np.full(n, int(label)), box, periodic,

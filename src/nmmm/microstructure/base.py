@@ -7,6 +7,7 @@
   length (nm), with analytic raw moments (needed by the Boolean model, p = 1 − exp(−θ E[V])).
 - :func:`as_size_distribution` — a number or a distribution → :class:`SizeDistribution`.
 - :func:`as_voxel_nm` — validate a voxel size per axis.
+- :func:`as_box_nm` — validate a cell size (2 or 3 positive lengths in nm).
 - :func:`random_rotations` — uniformly distributed random rotation matrices (Shoemake).
 
 Conventions: lengths in nm; label 0 is the matrix (binder), labels 1, 2, ... are phases;
@@ -35,8 +36,25 @@ __all__ = [
     "SizeDistribution",
     "as_size_distribution",
     "as_voxel_nm",
+    "as_box_nm",
     "random_rotations",
 ]
+
+
+def as_box_nm(box_nm, name: str = "box_nm") -> tuple[float, ...]:
+    """Return a cell size as a tuple of 2 or 3 finite lengths > 0 (nm)."""
+    try:
+        b = np.atleast_1d(np.asarray(box_nm, dtype=float))
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must hold 2 or 3 positive lengths (nm), got {box_nm!r}") from None
+    if b.ndim != 1 or b.size not in (2, 3) or not np.all(np.isfinite(b)) or np.any(b <= 0):
+        raise InvalidInputError(f"{name} must hold 2 or 3 positive lengths (nm), got {box_nm!r}")
+    return tuple(float(x) for x in b)
+
+
+def seed_param(seed):
+    """How a seed is recorded in a model's parameters (an int, None, or "generator")."""
+    return seed if isinstance(seed, (int, type(None))) else "generator"
 
 
 def as_voxel_nm(voxel_nm, ndim: int) -> tuple[float, ...]:

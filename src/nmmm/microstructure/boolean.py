@@ -37,7 +37,14 @@ import numpy as np
 from scipy import integrate
 
 from nmmm.errors import InvalidInputError
-from nmmm.microstructure.base import Microstructure, as_size_distribution, as_voxel_nm, random_rotations
+from nmmm.microstructure.base import (
+    Microstructure,
+    as_box_nm,
+    as_size_distribution,
+    as_voxel_nm,
+    random_rotations,
+    seed_param,
+)
 from nmmm.microstructure.particles import SHAPES, ParticleSet
 from nmmm.spectra import check_fraction, check_positive
 
@@ -176,7 +183,7 @@ def boolean_particles(
         Random (uniform) or aligned with the cell axes (disc normals along z).
     seed : int or numpy Generator
     """
-    box = tuple(float(b) for b in box_nm)
+    box = as_box_nm(box_nm)
     ndim = len(box)
     if grain not in GRAINS:
         raise InvalidInputError(f"grain must be one of {GRAINS}, got {grain!r}")
@@ -243,7 +250,7 @@ def boolean_particles(
         "mean_grain_volume_nm": ev,
         "target_fraction": float(boolean_fraction(theta, ev)),
         "orientation": orientation,
-        "seed": seed if isinstance(seed, (int, type(None))) else "generator",
+        "seed": seed_param(seed),
         "box_nm": list(box),
     }
     if grain == "cube":

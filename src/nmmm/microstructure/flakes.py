@@ -45,7 +45,7 @@ import numba
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.microstructure.base import Microstructure, as_size_distribution
+from nmmm.microstructure.base import Microstructure, as_size_distribution, seed_param
 from nmmm.microstructure.particles import SHAPES, ParticleSet
 from nmmm.spectra import check_fraction, check_positive
 
@@ -394,7 +394,7 @@ def flake_deposit(
         "number_density_per_mm2": n / area * 1e12,
         "tilt_std_deg": float(tilt_std_deg),
         "exclusion_nm": float(exclusion_nm),
-        "seed": seed if isinstance(seed, (int, type(None))) else "generator",
+        "seed": seed_param(seed),
         "box_nm": list(box),
     }
     if mode == "deposit":

@@ -50,7 +50,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from nmmm.errors import ConvergenceError, InvalidInputError
-from nmmm.microstructure.base import Microstructure, as_size_distribution, random_rotations
+from nmmm.microstructure.base import Microstructure, as_box_nm, as_size_distribution, random_rotations, seed_param
 from nmmm.microstructure.boolean import cell_box_nm
 from nmmm.microstructure.particles import SHAPES, ParticleSet, superball_volume
 from nmmm.spectra import check_fraction
@@ -63,6 +63,8 @@ __all__ = [
     "hardcore_pseudocubes",
     "max_hardcore_fraction",
     "pseudocube_half_size",
+    "unit_grain_geometry",
+    "grain_geometry",
 ]
 
 #: RSA saturation (jamming) fraction of equal exclusion spheres, by dimension.
@@ -230,6 +232,39 @@ def pseudocube_half_size(diagonal_nm, exponent: float, ndim: int = 3) -> float:
     return float(diagonal_nm) / (2 * math.sqrt(ndim) * ndim ** (-inv))
 
 
+def unit_grain_geometry(shape: str, exponent: float, ndim: int) -> tuple[float, float]:
+    """Volume (area in 2-D) and circumscribed radius of a grain of unit size.
+
+    ``"sphere"``: the size is the radius (V = 4π/3, π in 2-D; R = 1); ``"pseudocube"``: the
+    size is the large diagonal (a superball of :func:`pseudocube_half_size`; R = 1/2).
+    """
+    if shape == "sphere":
+        return (math.pi if ndim == 2 else 4 / 3 * math.pi), 1.0
+    a = pseudocube_half_size(1.0, exponent, ndim)
+    return float(superball_volume(np.array([a, a, a]), exponent, ndim)), 0.5
+
+
+def grain_geometry(rng, sizes_nm, shape: str, exponent: float, ndim: int):
+    """Rotations, half sizes, shape codes and exponents of ``len(sizes_nm)`` grains.
+
+    ``"sphere"``: ``sizes_nm`` are radii, no rotation; ``"pseudocube"``: large diagonals,
+    uniformly random orientations drawn from ``rng`` (an exact cube for ``exponent = inf``).
+    Returns ``(rotations (n, 3, 3), half_sizes (n, 3), kinds (n,), exponents (n,))`` as
+    :class:`~nmmm.microstructure.particles.ParticleSet` takes them.
+    """
+    sizes = np.asarray(sizes_nm, float)
+    n = sizes.size
+    half = np.empty((n, 3))
+    if shape == "sphere":
+        rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        half[:] = sizes[:, None]
+        return rot, half, np.full(n, SHAPES["superball"]), np.full(n, 2.0)
+    rot = random_rotations(rng, n, ndim)
+    half[:] = (sizes * pseudocube_half_size(1.0, exponent, ndim))[:, None]
+    kinds = np.full(n, SHAPES["box"] if math.isinf(exponent) else SHAPES["superball"])
+    return rot, half, kinds, np.full(n, float(exponent))
+
+
 def max_hardcore_fraction(particle_volume_nm, exclusion_radius_nm, ndim: int = 3) -> float:
     """The RSA limit of the particle fraction: jamming × V_particle / V_exclusion."""
     jam = RSA_JAMMING[ndim][0]
@@ -275,10 +310,8 @@ def hardcore_particles(
     ConvergenceError
         If it is within the limit but too close to it for ``max_attempts``.
     """
-    box = tuple(float(b) for b in box_nm)
+    box = as_box_nm(box_nm)
     ndim = len(box)
-    if ndim not in (2, 3):
-        raise InvalidInputError(f"box_nm must have 2 or 3 entries, got {box_nm!r}")
     p = float(check_fraction(fraction, "fraction"))
     if not math.isfinite(exclusion_nm) or exclusion_nm < 0:
         raise InvalidInputError(f"exclusion_nm must be >= 0 (nm), got {exclusion_nm!r}")
@@ -290,14 +323,7 @@ def hardcore_particles(
     if shape == "pseudocube" and not (exponent >= 2):
         raise InvalidInputError(f"pseudo-cube exponent must be >= 2 (inf = cube), got {exponent!r}")
 
-    # particle volume and circumscribed radius per unit size
-    if shape == "sphere":
-        circ_per_size = 1.0  # size = radius
-        vol_per_size = math.pi if ndim == 2 else 4 / 3 * math.pi
-    else:
-        a = pseudocube_half_size(1.0, exponent, ndim)  # per unit diagonal
-        circ_per_size = 0.5
-        vol_per_size = float(superball_volume(np.array([a, a, a]), exponent, ndim))
+    vol_per_size, circ_per_size = unit_grain_geometry(shape, exponent, ndim)
     ebox = float(np.prod(box))
     jam, src = RSA_JAMMING[ndim]
     # monodisperse reachability (the limit is higher for polydisperse packings)
@@ -332,17 +358,7 @@ def hardcore_particles(
     if np.any(2 * rex >= np.array(box)[:, None].min()) and n:
         raise InvalidInputError("particles (with exclusion zone) larger than the cell; enlarge the cell")
     centres = rsa_centres(box, rex, seed=rng, periodic=periodic, max_attempts=max_attempts, progress=progress)
-    half = np.empty((n, 3))
-    if shape == "sphere":
-        rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
-        half[:] = sizes[:, None]
-        kinds = np.full(n, SHAPES["superball"])
-        expo = np.full(n, 2.0)
-    else:
-        rot = random_rotations(rng, n, ndim)
-        half[:] = (sizes * pseudocube_half_size(1.0, exponent, ndim))[:, None]
-        kinds = np.full(n, SHAPES["box"] if math.isinf(exponent) else SHAPES["superball"])
-        expo = np.full(n, float(exponent))
+    rot, half, kinds, expo = grain_geometry(rng, sizes, shape, exponent, ndim)
     params = {
         "model": f"hardcore_{shape}s",
         "shape": shape,
@@ -351,7 +367,7 @@ def hardcore_particles(
         "target_fraction": p,
         "exclusion_nm": float(exclusion_nm),
         "exclusion_radius_nm": float(rex.mean()),
-        "seed": seed if isinstance(seed, (int, type(None))) else "generator",
+        "seed": seed_param(seed),
         "box_nm": list(box),
     }
     if shape == "pseudocube":

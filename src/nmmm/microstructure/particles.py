@@ -31,7 +31,7 @@ import numpy as np
 from scipy import special
 
 from nmmm.errors import InvalidInputError
-from nmmm.microstructure.base import Microstructure, as_voxel_nm
+from nmmm.microstructure.base import Microstructure, as_box_nm, as_voxel_nm
 
 __all__ = ["ParticleSet", "rasterize_particles", "SHAPES", "superball_volume"]
 
@@ -113,10 +113,7 @@ class ParticleSet:
     params: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        box = tuple(float(b) for b in np.atleast_1d(self.box_nm))
-        if len(box) not in (2, 3) or not all(b > 0 and math.isfinite(b) for b in box):
-            raise InvalidInputError(f"box_nm must hold 2 or 3 positive lengths (nm), got {self.box_nm!r}")
-        object.__setattr__(self, "box_nm", box)
+        object.__setattr__(self, "box_nm", as_box_nm(self.box_nm))
         c = np.asarray(self.centres_nm, float).reshape(-1, 3)
         n = c.shape[0]
         for name, arr, shp in (
