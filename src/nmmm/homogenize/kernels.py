@@ -23,66 +23,78 @@ import numpy as np
 from numba import njit, prange
 
 
-@njit(parallel=True, cache=True)
+@njit(inline="always")
+def _k_components(a, b, ny, has_ny, i1, i2, i3):
+    k1 = a[0, i1] * b[1, i2] * b[2, i3]
+    k2 = b[0, i1] * a[1, i2] * b[2, i3]
+    k3 = b[0, i1] * b[1, i2] * a[2, i3]
+    if has_ny:
+        reg = ((i1 != 0) and not ny[0, i1]) or ((i2 != 0) and not ny[1, i2]) or ((i3 != 0) and not ny[2, i3])
+        if reg:
+            if ny[0, i1]:
+                k1 = k1 * 0
+            if ny[1, i2]:
+                k2 = k2 * 0
+            if ny[2, i3]:
+                k3 = k3 * 0
+    return k1, k2, k3
+
+
+@njit(parallel=True, cache=True, fastmath=True)
 def project(F, a, b, ny, has_ny, mode):
-    """Apply Γ (mode 0) or I − 2Γ (mode 1) in place to F of shape (d, N1, N2, N3)."""
+    """Apply Γ (mode 0) or I − 2Γ (mode 1) in place to F of shape (d, N1, N2, N3), d = 2 or 3."""
     d = F.shape[0]
     n1, n2, n3 = F.shape[1], F.shape[2], F.shape[3]
+    two = 2.0
     for i1 in prange(n1):
-        k = np.zeros(3, dtype=F.dtype)
         for i2 in range(n2):
+            ab = a[0, i1] * b[1, i2]  # hoisted per-axis products
+            ba = b[0, i1] * a[1, i2]
+            bb = b[0, i1] * b[1, i2]
             for i3 in range(n3):
-                a1 = a[0, i1]
-                a2 = a[1, i2]
-                a3 = a[2, i3]
-                b1 = b[0, i1]
-                b2 = b[1, i2]
-                b3 = b[2, i3]
-                k[0] = a1 * b2 * b3
-                k[1] = b1 * a2 * b3
-                k[2] = b1 * b2 * a3
                 if has_ny:
-                    reg = ((i1 != 0) and not ny[0, i1]) or ((i2 != 0) and not ny[1, i2]) or (
-                        (i3 != 0) and not ny[2, i3]
-                    )
-                    if reg:
-                        if ny[0, i1]:
-                            k[0] = 0.0
-                        if ny[1, i2]:
-                            k[1] = 0.0
-                        if ny[2, i3]:
-                            k[2] = 0.0
-                n2k = 0.0
-                s = 0.0 + 0.0j
-                for j in range(d):
-                    kr = k[j].real
-                    ki = k[j].imag
-                    n2k += kr * kr + ki * ki
-                    s += np.conj(k[j]) * F[j, i1, i2, i3]
-                if n2k > 0.0:
-                    s = s / n2k
-                    if mode == 0:
-                        for j in range(d):
-                            F[j, i1, i2, i3] = k[j] * s
-                    else:
-                        for j in range(d):
-                            F[j, i1, i2, i3] = F[j, i1, i2, i3] - 2.0 * k[j] * s
+                    k1, k2, k3 = _k_components(a, b, ny, has_ny, i1, i2, i3)
                 else:
+                    k1 = ab * b[2, i3]
+                    k2 = ba * b[2, i3]
+                    k3 = bb * a[2, i3]
+                f1 = F[0, i1, i2, i3]
+                f2 = F[1, i1, i2, i3]
+                n2k = k1.real * k1.real + k1.imag * k1.imag + k2.real * k2.real + k2.imag * k2.imag
+                s = np.conj(k1) * f1 + np.conj(k2) * f2
+                if d == 3:
+                    f3 = F[2, i1, i2, i3]
+                    n2k += k3.real * k3.real + k3.imag * k3.imag
+                    s += np.conj(k3) * f3
+                if n2k > 0.0:
+                    s = s * (1.0 / n2k)
                     if mode == 0:
-                        for j in range(d):
-                            F[j, i1, i2, i3] = 0.0
+                        F[0, i1, i2, i3] = k1 * s
+                        F[1, i1, i2, i3] = k2 * s
+                        if d == 3:
+                            F[2, i1, i2, i3] = k3 * s
+                    else:
+                        F[0, i1, i2, i3] = f1 - two * k1 * s
+                        F[1, i1, i2, i3] = f2 - two * k2 * s
+                        if d == 3:
+                            F[2, i1, i2, i3] = f3 - two * k3 * s
+                elif mode == 0:
+                    F[0, i1, i2, i3] = 0
+                    F[1, i1, i2, i3] = 0
+                    if d == 3:
+                        F[2, i1, i2, i3] = 0
     return F
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, fastmath=True)
 def direction_and_eps(p, q, r, beta, labels, tab, update):
     """If ``update``: p ← r + β p. Then q ← ε p. Returns Σ ε p·p (bilinear, no conjugate)."""
     d, n = p.shape
-    acc = 0.0 + 0.0j
-    for i in prange(n):
-        e = tab[labels[i]]
-        loc = 0.0 + 0.0j
-        for j in range(d):
+    acc_re = 0.0
+    acc_im = 0.0
+    for j in range(d):
+        for i in prange(n):
+            e = tab[labels[i]]
             if update:
                 v = r[j, i] + beta * p[j, i]
                 p[j, i] = v
@@ -90,39 +102,39 @@ def direction_and_eps(p, q, r, beta, labels, tab, update):
                 v = p[j, i]
             ev = e * v
             q[j, i] = ev
-            loc += ev * v
-        acc += loc
-    return acc
+            w = ev * v
+            acc_re += w.real
+            acc_im += w.imag
+    return acc_re + 1j * acc_im
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, fastmath=True)
 def cocg_update(x, r, p, q, alpha):
     """x ← x + α p; r ← r − α q. Returns (rᵀr, ‖r‖²)."""
     d, n = x.shape
-    rr = 0.0 + 0.0j
+    rr_re = 0.0
+    rr_im = 0.0
     nr = 0.0
-    for i in prange(n):
-        lrr = 0.0 + 0.0j
-        lnr = 0.0
-        for j in range(d):
+    for j in range(d):
+        for i in prange(n):
             x[j, i] = x[j, i] + alpha * p[j, i]
             v = r[j, i] - alpha * q[j, i]
             r[j, i] = v
-            lrr += v * v
-            lnr += v.real * v.real + v.imag * v.imag
-        rr += lrr
-        nr += lnr
-    return rr, nr
+            vr = v.real
+            vi = v.imag
+            rr_re += vr * vr - vi * vi
+            rr_im += 2.0 * vr * vi
+            nr += vr * vr + vi * vi
+    return rr_re + 1j * rr_im, nr
 
 
 @njit(parallel=True, cache=True)
 def eps_times(q, x, labels, tab, e0):
-    """q ← ε (e0 + x) (e0 a constant vector; x may be the zero field when all-zero)."""
+    """q ← ε (e0 + x) (e0 a constant vector)."""
     d, n = x.shape
-    for i in prange(n):
-        e = tab[labels[i]]
-        for j in range(d):
-            q[j, i] = e * (e0[j] + x[j, i])
+    for j in range(d):
+        for i in prange(n):
+            q[j, i] = tab[labels[i]] * (e0[j] + x[j, i])
     return q
 
 

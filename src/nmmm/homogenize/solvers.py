@@ -161,18 +161,19 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
     rho = complex(np.dot(rv, rv))
     history = [_norm(r) / nb]
     beta = 0.0j
+    ctype = problem.dtype.type
     converged = history[-1] <= tol
     message = ""
     it = 0
     while not converged and it < maxiter:
-        pq = kernels.direction_and_eps(p, q, r, beta, problem.labels, tab, True)
+        pq = kernels.direction_and_eps(p, q, r, ctype(beta), problem.labels, tab, True)
         problem.project_inplace(q)
         it += 1
         if _bad(pq) or _bad(rho):
             message = "COCG breakdown (pᵀAp or rᵀr vanished)"
             break
         alpha = rho / pq
-        rho_new, nr = kernels.cocg_update(x, r, p, q, alpha)
+        rho_new, nr = kernels.cocg_update(x, r, p, q, ctype(alpha))
         res = float(np.sqrt(nr)) / nb
         history.append(res)
         if not np.isfinite(res) or res > 1e8:
