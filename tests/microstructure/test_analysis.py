@@ -121,6 +121,10 @@ def test_bad_images(tmp_path):
     bad.write_text("not an image")
     with pytest.raises(DataFileError, match="cannot read"):
         M.read_image(bad)
+    fake = tmp_path / "fake.npz"
+    fake.write_text("not an archive")
+    with pytest.raises(DataFileError, match="not a .npz"):
+        M.load_microstructure(fake)
     with pytest.raises(InvalidInputError, match="NaN"):
         M.binarize(np.array([[0.0, np.nan], [1.0, 0.5]]))
     with pytest.raises(InvalidInputError, match="binary"):

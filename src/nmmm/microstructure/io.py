@@ -17,6 +17,7 @@ The metadata hold ``voxel_nm``, ``phases``, ``periodic``, ``params`` and ``axes`
 from __future__ import annotations
 
 import json
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -113,6 +114,11 @@ def load_microstructure(path, voxel_nm=None) -> Microstructure:
                 meta = None
             lab = arr.T if meta is not None else arr
         elif suf == ".npz":
+            if not zipfile.is_zipfile(p):
+                raise DataFileError(
+                    f"cannot read microstructure file {p}: not a .npz (zip) archive; give a file written by "
+                    "save_microstructure or numpy.savez with an integer 'labels' array"
+                )
             with np.load(p, allow_pickle=False) as z:
                 if "labels" not in z:
                     raise DataFileError(f"{p}: no 'labels' array in the .npz file")
