@@ -166,3 +166,24 @@ def test_broadcast_and_bad_input(gold_silica):
         bruggeman(1.0, 2.0, 1.5)
     with pytest.raises(InvalidInputError):
         bruggeman([1.0, np.nan], [0.5, 0.5])
+
+
+def test_ellipsoidal_grains_one_upper_root_and_dilute_limit():
+    """Polder–van Santen (random ellipsoids): passive root solving the equation; dilute limit
+    eps_m (1 + p <alpha>) as Maxwell Garnett (Bohren & Huffman §8.5)."""
+    from nmmm.ema import Shape, maxwell_garnett_ellipsoid, spheroid_depolarization
+
+    rng = np.random.default_rng(16)
+    ea, eb, f = random_eps(rng, 1000), random_eps(rng, 1000), rng.uniform(0, 1, 1000)
+    for shapes in ([Shape.spheroid(4.0), None], [Shape.spheroid(0.1), Shape.spheroid(3.0)],
+                   [Shape((0.0, 0.0, 1.0)), None], [Shape.cube(), None]):
+        out = bruggeman(ea, eb, f, shapes=shapes)
+        assert np.all(out.imag >= 0)
+        assert np.max(np.abs(bruggeman_residual(out, [ea, eb], [f, 1 - f], shapes=shapes))) < 1e-9
+    ei, em, p = -12 + 1.0j, 2.1, 1e-6
+    L = spheroid_depolarization(4.0)
+    np.testing.assert_allclose(bruggeman(ei, em, p, shapes=[Shape.spheroid(4.0), None]),
+                               maxwell_garnett_ellipsoid(ei, em, p, L), rtol=1e-10)
+    np.testing.assert_allclose(bruggeman(ea, eb, f, shapes=[Shape.sphere(), None]), bruggeman(ea, eb, f), rtol=1e-9)
+    with pytest.raises(InvalidInputError, match="random"):
+        bruggeman(ea, eb, f, shapes=[Shape.spheroid(2.0, orientation="aligned"), None])

@@ -99,7 +99,7 @@ def test_mix_size_warnings_and_errors():
     with pytest.raises(InvalidInputError):
         Inclusion(2.0, 1.5)
     with pytest.raises(InvalidInputError):
-        mix(1.5, [(2.0, 0.1, Shape.cube())], method="bruggeman")
+        mix(1.5, [(2.0, 0.1, Shape.cube())], method="looyenga")
 
 
 def test_mixture_is_causal_and_decoupled_model_is_not(gold_silica):
@@ -113,3 +113,13 @@ def test_mixture_is_causal_and_decoupled_model_is_not(gold_silica):
     assert change.relative_error < 0.1
     reports = kk_check_mixture(glass, si, n_points=800)
     assert reports["decoupled"].max_abs > 5 * reports["mixture"].max_abs
+
+
+def test_mix_bruggeman_with_rods_matches_formula():
+    from nmmm.ema import bruggeman
+
+    w = np.linspace(400, 700, 7)
+    rods = Shape.spheroid(3.0)
+    m = mix(1.5, [Inclusion(0.2 + 3j, 0.2, rods)], method="bruggeman")
+    ref = bruggeman((0.2 + 3j) ** 2, 2.25, 0.2, shapes=[rods, None])
+    np.testing.assert_allclose(m.eps(w), np.full(w.size, ref), rtol=1e-12)

@@ -19,7 +19,10 @@ permittivities. The roots of the regularised polynomial come from the Aberth–E
 one is polished by Newton's method on the unperturbed polynomial; a Numba kernel runs this
 over all wavelengths and fractions (no Python loop).
 
-Spherical inclusions; the percolation threshold of a conducting phase is p = 1/3.
+Spherical grains by default (the percolation threshold of a conducting phase is then
+p = 1/3); randomly oriented ellipsoidal grains with ``shapes=`` (Polder & van Santen 1946),
+for which the same root selection applies (one root in the upper half plane, checked by
+random sampling in the tests).
 
 References
 ----------
@@ -28,6 +31,8 @@ References
 - G. W. Milton, "Bounds on the complex permittivity of a two-component composite material",
   J. Appl. Phys. 52, 5286 (1981).
 - D. E. Aspnes, "Optical properties of thin films", Thin Solid Films 89, 249 (1982).
+- D. Polder, J. H. van Santen, "The effective permeability of mixtures of solids",
+  Physica 12, 257 (1946).
 - T. G. Mackay, A. Lakhtakia, "Modern Analytical Electromagnetic Homogenization",
   Morgan & Claypool (2015), ch. 3 (root selection).
 """
@@ -69,26 +74,29 @@ def _phases(eps_phases, fractions):
 
 
 @numba.njit(cache=True)
-def _poly_from_phases(e, f, out, term):
-    """Coefficients (ascending powers) of Σ_i f_i (e_i − ε) Π_{j≠i} (e_j + 2ε) into ``out``
-    (``term``: work array of the same size)."""
-    n = e.size
-    for k in range(n + 1):
+def _poly_from_groups(e, f, g_phase, g_L, g_mult, out, term):
+    """Ascending coefficients of Σ_g w_g (e_i(g) − ε) Π_{h≠g} (L_h e_i(h) + (1 − L_h) ε)
+    into ``out`` (``term``: work array of the same size); w_g = f_i(g) · mult_g."""
+    G = g_phase.size
+    for k in range(G + 1):
         out[k] = 0
-    for i in range(n):
-        for k in range(n + 1):
+    for g in range(G):
+        for k in range(G + 1):
             term[k] = 0
-        term[0] = f[i] * e[i]
-        term[1] = -f[i]
+        w = f[g_phase[g]] * g_mult[g]
+        term[0] = w * e[g_phase[g]]
+        term[1] = -w
         deg = 1
-        for j in range(n):
-            if j == i:
+        for h in range(G):
+            if h == g:
                 continue
-            for k in range(deg + 1, 0, -1):  # multiply by (e_j + 2ε) in place
-                term[k] = e[j] * term[k] + 2 * term[k - 1]
-            term[0] = e[j] * term[0]
+            a0 = g_L[h] * e[g_phase[h]]
+            a1 = 1.0 - g_L[h]
+            for k in range(deg + 1, 0, -1):  # multiply by (a0 + a1 ε) in place
+                term[k] = a0 * term[k] + a1 * term[k - 1]
+            term[0] = a0 * term[0]
             deg += 1
-        for k in range(n + 1):
+        for k in range(G + 1):
             out[k] += term[k]
 
 
@@ -106,7 +114,8 @@ def _horner(c, z):
 
 @numba.njit(cache=True)
 def _aberth(c, z):
-    """All roots of the polynomial with ascending coefficients c (Aberth–Ehrlich), into z."""
+    """All roots of the polynomial with ascending coefficients c (Aberth–Ehrlich), into z
+    (len(z) = len(c) − 1, the degree)."""
     n = c.size - 1
     lead = c[n]
     radius = 0.0
@@ -137,15 +146,17 @@ def _aberth(c, z):
 
 
 @numba.njit(cache=True)
-def _bruggeman_kernel(e, f, delta, out):
-    """Physical Bruggeman root for each row of e, f (N, n): limiting absorption, then Newton
-    polishing on the unperturbed polynomial."""
+def _bruggeman_kernel(e, f, g_phase, g_L, g_mult, delta, out):
+    """Physical Bruggeman root for each row of e, f (N, n) with inclusion groups (phase,
+    depolarization factor, multiplicity): limiting absorption, then Newton polishing on the
+    unperturbed polynomial."""
     N, n = e.shape
-    c = np.empty(n + 1, dtype=np.complex128)
-    cr = np.empty(n + 1, dtype=np.complex128)
-    z = np.empty(n, dtype=np.complex128)
+    G = g_phase.size
+    c = np.empty(G + 1, dtype=np.complex128)
+    cr = np.empty(G + 1, dtype=np.complex128)
+    z = np.empty(G, dtype=np.complex128)
     er = np.empty(n, dtype=np.complex128)
-    work = np.empty(n + 1, dtype=np.complex128)
+    work = np.empty(G + 1, dtype=np.complex128)
     for r in range(N):
         scale = 0.0
         for i in range(n):
@@ -154,8 +165,16 @@ def _bruggeman_kernel(e, f, delta, out):
             scale = 1.0
         for i in range(n):
             er[i] = e[r, i] + 1j * delta * scale
-        _poly_from_phases(er, f[r], cr, work)
-        if n == 2:  # quadratic: closed form, the cancellation-free pair of roots
+        _poly_from_groups(er, f[r], g_phase, g_L, g_mult, cr, work)
+        big = 0.0
+        for k in range(G + 1):
+            big = max(big, abs(cr[k]))
+        deg = G
+        while deg > 1 and abs(cr[deg]) <= 1e-13 * big:  # L = 1 factors lower the degree
+            deg -= 1
+        if deg == 1:
+            z[0] = -cr[0] / cr[1]
+        elif deg == 2:  # quadratic: closed form, the cancellation-free pair of roots
             a2, a1, a0 = cr[2], cr[1], cr[0]
             sq = np.sqrt(a1 * a1 - 4 * a2 * a0)
             qq = -0.5 * (a1 + sq) if (a1.real * sq.real + a1.imag * sq.imag) >= 0 else -0.5 * (a1 - sq)
@@ -166,16 +185,16 @@ def _bruggeman_kernel(e, f, delta, out):
                 z[0] = qq / a2
                 z[1] = a0 / qq
         else:
-            _aberth(cr, z)
+            _aberth(cr[: deg + 1], z[:deg])
         best = z[0]
-        for k in range(1, n):
+        for k in range(1, deg):
             if z[k].imag > best.imag:
                 best = z[k]
-        _poly_from_phases(e[r], f[r], c, work)
+        _poly_from_groups(e[r], f[r], g_phase, g_L, g_mult, c, work)
         x = best
         last = np.inf
         for _ in range(60):
-            p, dp = _horner(c, x)
+            p, dp = _horner(c[: deg + 1], x)
             if dp == 0:
                 break
             step = p / dp
@@ -198,18 +217,51 @@ def _bruggeman_kernel(e, f, delta, out):
         out[r] = x
 
 
-def bruggeman_residual(eps_effective, eps_phases, fractions) -> np.ndarray:
-    """``Σ_i f_i (eps_i − eps) / (eps_i + 2 eps)`` — zero for a Bruggeman solution."""
+def _groups(n, shapes):
+    """(phase, L, multiplicity) of each distinct depolarization factor of each phase."""
+    from nmmm.ema.shapes import Shape
+
+    if shapes is None:
+        shapes = [None] * n
+    if not isinstance(shapes, (list, tuple)) or len(shapes) != n:
+        raise InvalidInputError(f"give one shape (or None for a sphere) per phase: {n} phases, shapes={shapes!r}")
+    phase, L, mult = [], [], []
+    for i, shape in enumerate(shapes):
+        shape = Shape.sphere() if shape is None else shape
+        if not isinstance(shape, Shape):
+            raise InvalidInputError(f"shapes[{i}] must be an nmmm.ema.Shape or None, got {shape!r}")
+        if shape.orientation != "random":
+            raise InvalidInputError("Bruggeman here is isotropic: shapes must have orientation='random'")
+        vals, counts = np.unique(np.round(np.asarray(shape.depolarization), 12), return_counts=True)
+        for v, c in zip(vals, counts):
+            phase.append(i)
+            L.append(float(v))
+            mult.append(c / 3.0)
+    return np.array(phase, dtype=np.int64), np.array(L), np.array(mult)
+
+
+def bruggeman_residual(eps_effective, eps_phases, fractions, shapes=None) -> np.ndarray:
+    """``Σ_i f_i <(eps_i − eps) / (eps + L_ij (eps_i − eps))>_j / 3`` — zero for a Bruggeman
+    solution (spheres: ``Σ_i f_i (eps_i − eps) / (eps_i + 2 eps)``)."""
     e, f = _phases(eps_phases, fractions)
-    eff = np.asarray(eps_effective, dtype=complex)[..., None]
-    return np.sum(f * (e - eff) / (e + 2 * eff), axis=-1)
+    g_phase, g_L, g_mult = _groups(e.shape[-1], shapes)
+    eff = np.asarray(eps_effective, dtype=complex)
+    total = 0
+    for i, L, m in zip(g_phase, g_L, g_mult):
+        d = e[..., i] - eff
+        total = total + f[..., i] * m * d / (eff + L * d) / 3
+    return total
 
 
-def bruggeman(eps_phases, fractions, fraction=None) -> np.ndarray:
-    """Bruggeman symmetric effective permittivity of spherical grains of n phases.
+def bruggeman(eps_phases, fractions, fraction=None, shapes=None) -> np.ndarray:
+    """Bruggeman symmetric effective permittivity of grains of n phases.
 
-    Solves ``Σ_i f_i (eps_i − eps) / (eps_i + 2 eps) = 0`` for the physical root (see the
-    module notes).
+    Solves ``Σ_i f_i (eps_i − eps) / (eps_i + 2 eps) = 0`` (spherical grains) for the
+    physical root (see the module notes). With ``shapes`` (one
+    :class:`~nmmm.ema.shapes.Shape` or ``None`` per phase, randomly oriented), the grains
+    of phase i are ellipsoids with depolarization factors L_ij and the condition is the
+    Polder–van Santen one, ``Σ_i f_i Σ_j (eps_i − eps) / (eps + L_ij (eps_i − eps)) = 0``
+    (the cube approximation of :mod:`~nmmm.ema.shapes` is accepted).
 
     Call forms
     ----------
@@ -234,13 +286,14 @@ def bruggeman(eps_phases, fractions, fraction=None) -> np.ndarray:
     if fraction is not None:
         eps_phases, fractions = [eps_phases, fractions], [fraction, 1 - as_fraction(fraction)]
     e, f = _phases(eps_phases, fractions)
+    g_phase, g_L, g_mult = _groups(e.shape[-1], shapes)
     if e.shape[-1] == 1:
         return e[..., 0].copy()
     shape = e.shape[:-1]
     e2 = np.ascontiguousarray(e.reshape(-1, e.shape[-1]))
     f2 = np.ascontiguousarray(f.reshape(-1, f.shape[-1]).astype(float))
     out = np.empty(e2.shape[0], dtype=complex)
-    _bruggeman_kernel(e2, f2, _DELTA, out)
+    _bruggeman_kernel(e2, f2, g_phase, g_L, g_mult, _DELTA, out)
     out = out.reshape(shape)
     return passive(out)
 

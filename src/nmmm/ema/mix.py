@@ -120,8 +120,9 @@ def _eps_function(host, incs, method, orientation):
                         for e, inc in zip(epss, incs))
             return maxwell_garnett_polarizability(em, 1.0, alpha)
         fr = [inc.fraction for inc in incs]
-        rule = bruggeman if method == "bruggeman" else looyenga
-        return rule([em, *epss], [1 - sum(fr), *fr])
+        if method == "bruggeman":
+            return bruggeman([em, *epss], [1 - sum(fr), *fr], shapes=[None, *[inc.shape for inc in incs]])
+        return looyenga([em, *epss], [1 - sum(fr), *fr])
     return eps
 
 
@@ -135,8 +136,9 @@ def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = No
         Fractions are of the whole mixture; the host fills 1 − Σ fractions.
     method : {"maxwell_garnett", "maxwell_garnett_mie", "bruggeman", "looyenga"}
         Maxwell Garnett handles several populations, ellipsoids (randomly oriented) and cubes;
-        "maxwell_garnett_mie" needs spheres with ``radius_nm``; Bruggeman and Looyenga treat
-        every phase (host included) symmetrically, as spheres.
+        "maxwell_garnett_mie" needs spheres with ``radius_nm``; Bruggeman treats every phase
+        (host included, as spheres) symmetrically, the inclusions with their shapes
+        (Polder–van Santen); Looyenga is for spheres.
     name : str, optional
 
     Returns
@@ -153,7 +155,7 @@ def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = No
             raise InvalidInputError("aligned inclusions give an anisotropic medium: use mix_tensor "
                                     "(or Shape(..., orientation='random') for an isotropic mixture)")
         is_sphere = inc.shape.kind == "ellipsoid" and np.allclose(inc.shape.depolarization, 1 / 3, atol=1e-9)
-        if method in ("bruggeman", "looyenga", "maxwell_garnett_mie") and not is_sphere:
+        if method in ("looyenga", "maxwell_garnett_mie") and not is_sphere:
             raise InvalidInputError(f"method {method!r} is for spheres; use method='maxwell_garnett' for "
                                     f"{inc.shape.name}")
         if method == "maxwell_garnett_mie" and inc.radius_nm is None:
