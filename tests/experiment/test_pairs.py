@@ -125,3 +125,20 @@ def test_make_pairs_file_rejects_bad_arguments(tmp_path):
         make_pairs_file([], tmp_path / "x.toml", blank=3)
     with pytest.raises(InvalidInputError, match="at least one"):
         make_pairs_file([], tmp_path / "x.toml")
+
+
+def test_make_pairs_file_from_rendered_arrays(tmp_path):
+    import numpy as np
+    from PIL import Image
+
+    photo = write_image(tmp_path / "photo.jpg", size=(40, 20))
+    render = np.linspace(0, 1, 20 * 40 * 3).reshape(20, 40, 3)
+    toml = make_pairs_file([(render, photo, "plate A")], tmp_path / "exp" / "pairs.toml")
+    pair = load_pairs(toml).pairs[0]
+    assert pair.rendered == (tmp_path / "exp" / "rendered" / "plate-A.png").resolve()
+    back = np.asarray(Image.open(pair.rendered))
+    np.testing.assert_array_equal(back, np.round(render * 255).astype(np.uint8))
+    with pytest.raises(InvalidInputError, match=r"in \[0, 1\]"):
+        make_pairs_file([(render * 2, photo, "x")], tmp_path / "bad.toml")
+    with pytest.raises(InvalidInputError, match="height, width, 3"):
+        make_pairs_file([(np.zeros((4, 4)), photo, "x")], tmp_path / "bad.toml")

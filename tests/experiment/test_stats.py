@@ -186,6 +186,13 @@ def test_analyse_responses_and_report(tmp_path):
     assert {g.name for g in a.pairs} == {"a", "b"}
     text = format_report(a)
     assert "Pooled (cluster-robust" in text and "TOST" in text
+    partial = _rows([15, 10, 12]) + _rows([4], n=5)
+    for r in partial:
+        r["n_trials"] = 20
+    for r in partial[-5:]:
+        r["participant_id"] = "dropout"
+    assert len(analyse_responses(partial).observers) == 4
+    assert [g.name for g in analyse_responses(partial, complete_only=True).observers] == ["P0", "P1", "P2"]
     one = analyse_responses(_rows([15]))
     assert one.pooled.method == "naive"
     with pytest.raises(InvalidInputError, match="no responses"):

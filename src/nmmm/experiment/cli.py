@@ -52,8 +52,10 @@ def serve(pairs_toml, db_path, host, port, admin_token, log_level):
               type=click.Choice(["two-sided", "greater", "less"]))
 @click.option("--interval", "interval_method", default="Wilson", show_default=True,
               type=click.Choice(["Wilson", "Clopper-Pearson"]))
+@click.option("--complete-only", is_flag=True, help="Analyse only observers who finished all their trials.")
 @click.option("--json", "as_json", is_flag=True, help="Print the analysis as JSON instead of text.")
-def stats(db_path, plot_path, delta, alpha, confidence, pooling, alternative, interval_method, as_json):
+def stats(db_path, plot_path, delta, alpha, confidence, pooling, alternative, interval_method, complete_only,
+          as_json):
     """Proportion correct per observer, per pair and pooled; binomial tests, d', CIs, TOST."""
     from dataclasses import asdict
 
@@ -61,7 +63,8 @@ def stats(db_path, plot_path, delta, alpha, confidence, pooling, alternative, in
     from nmmm.experiment.storage import read_responses
 
     analysis = analyse_responses(read_responses(db_path), delta=delta, alpha=alpha, confidence=confidence,
-                                 pooling=pooling, alternative=alternative, interval_method=interval_method)
+                                 pooling=pooling, alternative=alternative, interval_method=interval_method,
+                                 complete_only=complete_only)
     if as_json:
         click.echo(json.dumps(asdict(analysis), indent=2, default=float))
     else:

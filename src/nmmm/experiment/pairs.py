@@ -392,15 +392,38 @@ def _toml_value(v) -> str:
     return _toml_str(v)
 
 
+def _write_array_png(image, path: Path, name: str) -> Path:
+    """Write an sRGB-encoded image array (floats in [0, 1] or uint8) as an 8-bit PNG."""
+    import numpy as np
+    from PIL import Image
+
+    a = np.asarray(image)
+    if a.ndim != 3 or a.shape[2] not in (3, 4) or a.dtype.kind not in "uf":
+        raise InvalidInputError(f"{name}: a rendered image array must be (height, width, 3) floats in [0, 1] "
+                                f"or uint8 (sRGB-encoded), got shape {a.shape} dtype {a.dtype}")
+    if a.dtype.kind == "f":
+        if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
+            raise InvalidInputError(f"{name}: rendered image values must be finite and in [0, 1] (sRGB-encoded; "
+                                    f"tone-map or clip first), got range [{np.nanmin(a):.3g}, {np.nanmax(a):.3g}]")
+        a = np.round(a * 255)
+    elif a.dtype != np.uint8:
+        raise InvalidInputError(f"{name}: integer rendered images must be uint8, got {a.dtype}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(a[..., :3].astype(np.uint8), "RGB").save(path)
+    return path
+
+
 def make_pairs_file(pairs, out_toml, *, stereo_pairs=None, check_images: bool = True,
                     **settings) -> Path:
     """Write a ``pairs.toml`` for the 2AFC experiment and return its path.
 
     Parameters
     ----------
-    pairs : iterable of (rendered_path, photo_path, label)
+    pairs : iterable of (rendered, photo_path, label)
         The computed image, the photograph of the same real plate, and a label for the
-        experimenter (it becomes the pair id after slugification, made unique).
+        experimenter (it becomes the pair id after slugification, made unique). ``rendered``
+        is an image path, or an sRGB-encoded image array (H, W, 3) — floats in [0, 1] or
+        uint8 — which is written as ``<out_toml dir>/rendered/<pair id>.png``.
     out_toml : path
         The file to write; image paths are written relative to its directory where possible.
     stereo_pairs : iterable of ((rendered_left, rendered_right), (photo_left, photo_right)), optional
@@ -455,6 +478,8 @@ def make_pairs_file(pairs, out_toml, *, stereo_pairs=None, check_images: bool = 
         while pid in used:
             pid, n = f"{base_id}-{n}", n + 1
         used.add(pid)
+        if not isinstance(rendered, (str, os.PathLike)):
+            rendered = _write_array_png(rendered, base / "rendered" / f"{pid}.png", f"pair {i + 1} ({label!r})")
         lines += ["[[pair]]", f"id = {_toml_str(pid)}", f"label = {_toml_str(label)}",
                   f"rendered = {_toml_str(rel(rendered))}", f"photo = {_toml_str(rel(photo))}"]
         if stereo_pairs is not None:

@@ -499,7 +499,7 @@ def _group(name, correct, rt, confidence, alpha, alternative, interval_method):
 
 def analyse_responses(rows, *, delta: float = 0.1, alpha: float = 0.05, confidence: float = 0.95,
                       pooling: str = "cluster-robust", alternative: str = "two-sided",
-                      interval_method: str = "Wilson") -> ExperimentAnalysis:
+                      interval_method: str = "Wilson", complete_only: bool = False) -> ExperimentAnalysis:
     """Analyse 2AFC responses: per observer, per pair, pooled, and equivalence to chance.
 
     Parameters
@@ -512,9 +512,16 @@ def analyse_responses(rows, *, delta: float = 0.1, alpha: float = 0.05, confiden
     alternative : str
         Of the tests against 0.5: 'two-sided' (default: a rendering systematically judged *more*
         real than the photograph is also distinguishable), 'greater' or 'less'.
+    complete_only : bool
+        Keep only observers who answered all their trials (rows need ``n_trials``).
     """
     _check_delta(delta)
     rows = list(rows)
+    if complete_only:
+        answered = {}
+        for r in rows:
+            answered[r["participant_id"]] = answered.get(r["participant_id"], 0) + 1
+        rows = [r for r in rows if answered[r["participant_id"]] >= int(r["n_trials"])]
     if not rows:
         raise InvalidInputError("no responses to analyse (the database holds no answered trial)")
     try:
