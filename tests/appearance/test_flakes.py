@@ -225,3 +225,11 @@ def test_flake_list_from_microstructure_deposit():
     assert np.isclose(fl.optical_depth, np.sum(np.pi * d.diameters_nm ** 2 / 4) / (200e3 * 200e3))
     layer = fl.to_flake_layer()
     assert 0 < layer.tilt.mean_tilt_deg() < 20
+
+
+def test_tilt_from_normals_recovers_the_distribution():
+    g = gaussian_tilt(8.0)
+    k = TiltDistribution.from_normals(g.sample(20000, rng=5))
+    c = np.cos(np.radians([0.0, 5.0, 10.0, 15.0]))
+    assert np.allclose(k.pdf(c), g.pdf(c), rtol=0.08)
+    assert abs(k.mean_tilt_deg() - g.mean_tilt_deg()) < 0.5

@@ -15,7 +15,8 @@ Public objects
 --------------
 - :class:`TiltDistribution` — isotropic distribution of flake normals, a density per
   steradian, normalised over the upper hemisphere: ``gaussian_tilt(sigma_deg)``,
-  ``TiltDistribution.tabulated(tilt_deg, density)``, ``TiltDistribution.from_function(f)``.
+  ``TiltDistribution.tabulated(tilt_deg, density)``, ``TiltDistribution.from_function(f)``,
+  ``TiltDistribution.from_normals(normals)`` (kernel density estimate).
 - :func:`gaussian_tilt` — the usual model of flake misorientation.
 - :class:`MetalFlakeOptics` — opaque metal flake (Fresnel binder → metal, e.g. aluminium).
 - :class:`ThinFilmFlakeOptics` — a thin-film stack embedded in the binder (interference /
@@ -335,6 +336,38 @@ class TiltDistribution:
         t = np.linspace(0.0, 90.0, _N_TILT_NODES)
         return cls(t, np.asarray(density_per_sr(t), float) * np.ones_like(t), name)
 
+    @classmethod
+    def from_normals(cls, normals, bandwidth_deg: float | None = None, name: str = "from normals") -> "TiltDistribution":
+        """Smooth isotropic density estimated from flake normals (N, 3).
+
+        Kernel density estimate in the plane of tilt vectors θ(cos φ, sin φ) with a
+        Gaussian kernel of width h (Silverman's rule h = σ N^(−1/6) for two dimensions if
+        not given), averaged over azimuth — which gives, per tilt vector area,
+        p(θ) = (1/N) Σ_k exp(−(θ − θ_k)²/2h²) I0e(θ θ_k / h²) / (2π h²) —
+        then converted per steradian (× θ / sin θ) and normalised.
+        """
+        from scipy.special import i0e
+
+        nrm = check_finite(normals, "normals").astype(float).reshape(-1, 3)
+        if nrm.shape[0] < 2:
+            raise InvalidInputError("need at least two flake normals to estimate a tilt distribution")
+        th_k = np.arccos(np.clip(np.abs(nrm[:, 2]) / np.linalg.norm(nrm, axis=1), -1, 1))
+        if bandwidth_deg is None:
+            sig = np.sqrt(np.mean(th_k ** 2) / 2)  # per-axis spread of the tilt vectors
+            h = max(sig * th_k.size ** (-1 / 6), np.radians(0.05))
+        else:
+            h = np.radians(float(bandwidth_deg))
+            if not h > 0:
+                raise InvalidInputError("bandwidth_deg must be > 0")
+        t = np.linspace(0.0, 90.0, 2049)
+        th = np.radians(t)
+        dens = np.zeros_like(th)
+        for chunk in np.array_split(th_k, max(1, th_k.size // 2000)):
+            dens += np.sum(np.exp(-(th[:, None] - chunk[None, :]) ** 2 / (2 * h * h))
+                           * i0e(th[:, None] * chunk[None, :] / (h * h)), axis=1)
+        dens *= np.where(th > 0, th / np.maximum(np.sin(th), 1e-300), 1.0)
+        return cls(t, dens, name=f"{name} (KDE, h={np.degrees(h):.2f} deg)")
+
     # evaluation ----------------------------------------------------------------------
     def pdf(self, cos_tilt) -> np.ndarray:
         """Density per steradian of normals with cos(tilt) = ``cos_tilt``."""
@@ -561,16 +594,12 @@ class FlakeList:
 
     def to_flake_layer(self, tilt: TiltDistribution | None = None) -> FlakeLayer:
         """The statistical :class:`FlakeLayer` with the same optics and τ; the tilt
-        distribution is ``tilt``, the one the list was drawn from, or a histogram of the
-        normals (smoothed)."""
+        distribution is ``tilt``, the one the list was drawn from, or a kernel density
+        estimate from the normals (:meth:`TiltDistribution.from_normals`)."""
         if tilt is None:
             tilt = self.tilt
         if tilt is None:
-            th = np.degrees(np.arccos(self.normals[:, 2]))
-            edges = np.linspace(0, min(90.0, max(th.max() * 1.2, 1.0)), 41)
-            cnt, _ = np.histogram(th, edges)
-            sa = 2 * np.pi * (np.cos(np.radians(edges[:-1])) - np.cos(np.radians(edges[1:])))
-            tilt = TiltDistribution.tabulated(0.5 * (edges[1:] + edges[:-1]), cnt / sa, name="histogram")
+            tilt = TiltDistribution.from_normals(self.normals)
         return FlakeLayer(self.optics, tilt, self.optical_depth)
 
     # optics ---------------------------------------------------------------------------
