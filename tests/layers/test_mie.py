@@ -134,9 +134,10 @@ def test_material_inputs():
 @pytest.mark.parametrize(
     "kwargs, match",
     [
-        (dict(n_particle=1.5 - 0.1j), "k < 0"),
-        (dict(diameter_nm=0.0), "> 0"),
-        (dict(diameter_nm=-5.0), "> 0"),
+        (dict(n_particle=1.5 - 0.1j), "n_particle has k < 0"),
+        (dict(n_particle=np.nan), "n_particle contains NaN"),
+        (dict(diameter_nm=0.0), "diameter_nm must be > 0"),
+        (dict(diameter_nm=-5.0), "diameter_nm must be > 0"),
         (dict(n_medium=1.5 + 0.01j), "absorbing"),
         (dict(wavelength_nm=np.nan), "NaN"),
     ],

@@ -502,11 +502,17 @@ def mie_multilayer(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg=N
     ----------
     W. Yang, Appl. Opt. 42, 1710 (2003); Bohren & Huffman (1983), §8.1 for the coated sphere.
     """
-    w = as_wavelength_nm(wavelength_nm)
     if len(n_layers) != len(diameters_nm) or len(n_layers) < 1:
         raise InvalidInputError("give one index and one outer diameter per layer (core first)")
-    idx = [_particle_index(n, w, f"n_layers[{i}]") for i, n in enumerate(n_layers)]
-    ds = [check_positive(d, f"diameters_nm[{i}]") for i, d in enumerate(diameters_nm)]
+    names = [(f"n_layers[{i}]", f"diameters_nm[{i}]") for i in range(len(n_layers))]
+    return _mie_layers(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg, names)
+
+
+def _mie_layers(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg, names) -> MieResult:
+    """Validate (naming each argument as the caller's signature does) and run the kernel."""
+    w = as_wavelength_nm(wavelength_nm)
+    idx = [_particle_index(n, w, nn) for n, (nn, _) in zip(n_layers, names)]
+    ds = [check_positive(d, dn) for d, (_, dn) in zip(diameters_nm, names)]
     nm = _medium_index(n_medium, w)
     shape = np.broadcast_shapes(w.shape, nm.shape, *(i.shape for i in idx), *(d.shape for d in ds))
     L = len(idx)
@@ -559,7 +565,7 @@ def mie(n_particle, n_medium, diameter_nm, wavelength_nm, angles_deg=None) -> Mi
     >>> print(f"{float(r.qext):.5f} {float(r.qback):.5f}")
     3.10543 2.92534
     """
-    return mie_multilayer([n_particle], n_medium, [diameter_nm], wavelength_nm, angles_deg)
+    return _mie_layers([n_particle], n_medium, [diameter_nm], wavelength_nm, angles_deg, [("n_particle", "diameter_nm")])
 
 
 def mie_coated(n_core, n_shell, n_medium, core_diameter_nm, diameter_nm, wavelength_nm, angles_deg=None) -> MieResult:
@@ -568,4 +574,11 @@ def mie_coated(n_core, n_shell, n_medium, core_diameter_nm, diameter_nm, wavelen
     ``core_diameter_nm`` < ``diameter_nm`` (outer); efficiencies refer to the outer sphere.
     See :func:`mie_multilayer` for the parameters.
     """
-    return mie_multilayer([n_core, n_shell], n_medium, [core_diameter_nm, diameter_nm], wavelength_nm, angles_deg)
+    return _mie_layers(
+        [n_core, n_shell],
+        n_medium,
+        [core_diameter_nm, diameter_nm],
+        wavelength_nm,
+        angles_deg,
+        [("n_core", "core_diameter_nm"), ("n_shell", "diameter_nm")],
+    )
