@@ -108,8 +108,11 @@ class PaintFilm:
 
     def __post_init__(self):
         check_fraction(self.volume_fraction, "volume_fraction")
-        t = float(check_finite(self.thickness_nm, "thickness_nm")) if np.isfinite(self.thickness_nm) else np.inf
-        if not t > 0:
+        try:
+            t = float(self.thickness_nm)
+        except (TypeError, ValueError):
+            t = np.nan
+        if not t > 0:  # also NaN
             raise InvalidInputError(f"thickness_nm must be > 0 (np.inf for an opaque film), got {self.thickness_nm!r}")
         c = float(check_finite(self.clear_coat_thickness_nm, "clear_coat_thickness_nm"))
         if c < 0:
