@@ -33,6 +33,7 @@ import html
 import json
 import re
 import secrets
+import shutil
 import tempfile
 import uuid
 from contextlib import asynccontextmanager
@@ -95,12 +96,18 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
     from nmmm.experiment.stimuli import StimulusStore
 
     store = ResponseStore(db_path)
-    store.register_pairs(pairset)
     tmp = None
-    if cache_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="nmmm-stimuli-")
-        cache_dir = tmp.name
-    stimuli = StimulusStore(pairset, cache_dir, progress=progress)
+    try:
+        store.register_pairs(pairset)
+        if cache_dir is None:
+            tmp = tempfile.TemporaryDirectory(prefix="nmmm-stimuli-")
+            cache_dir = tmp.name
+        stimuli = StimulusStore(pairset, cache_dir, progress=progress)
+    except BaseException:
+        store.close()
+        if tmp is not None:
+            tmp.cleanup()
+        raise
     settings = pairset.settings
     stereo = settings.stereo
     slots = _SLOTS[stereo]
@@ -353,7 +360,12 @@ def serve(pairs_toml, db_path, *, host: str = "127.0.0.1", port: int = 8000, adm
     from nmmm.experiment.pairs import load_pairs
 
     pairset = load_pairs(pairs_toml)
-    app = create_app(pairset, db_path, admin_token=admin_token, progress=True)
+    # prepared stimuli live in one temporary folder per database, emptied at every start (a
+    # killed server leaves it behind; the next start reuses the place)
+    key = hashlib.sha256(str(Path(db_path).resolve()).encode()).hexdigest()[:16]
+    cache_dir = Path(tempfile.gettempdir()) / f"nmmm-stimuli-{key}"
+    shutil.rmtree(cache_dir, ignore_errors=True)
+    app = create_app(pairset, db_path, admin_token=admin_token, progress=True, cache_dir=cache_dir)
     shown = "127.0.0.1" if host in ("0.0.0.0", "::") else host
     echo(f"nmmm experiment: {len(pairset)} pair(s), {pairset.n_trials} trial(s) per participant, "
          f"responses in {db_path}")

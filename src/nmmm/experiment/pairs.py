@@ -44,6 +44,11 @@ allowed)::
     rendered_stereo = ["renders/h5_L.png", "renders/h5_R.png"]
     photo_stereo = ["photos/h5_L.jpg", "photos/h5_R.jpg"]
 
+In stereo mode each trial shows two stereo pairs, one above the other (choose top or
+bottom); each stereo pair is the left-eye and right-eye view side by side, in their own neutral
+frame, for a mirror or lens stereoscope ('parallel': left view on the left) or for cross-eyed
+free viewing ('cross').
+
 Within a pair, both images must have the same aspect ratio (within 1 %): a different
 shape would tell the participant which image is which. Images are re-encoded to PNG,
 converted to sRGB and resampled to a common size when served (see
