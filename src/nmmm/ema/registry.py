@@ -25,9 +25,9 @@ from nmmm.errors import InvalidInputError
 from nmmm.spectra import check_fraction
 
 
-def _bruggeman(eps_inclusion, eps_host, fraction):
-    """Bruggeman symmetric medium of two phases (spheres), physical root."""
-    return bruggeman(eps_inclusion, eps_host, fraction)
+def _bruggeman(eps_inclusion, eps_host, fraction, shapes=None):
+    """Bruggeman symmetric medium of two phases (spheres, or shapes=[Shape, Shape]), physical root."""
+    return bruggeman(eps_inclusion, eps_host, fraction, shapes=shapes)
 
 
 def _looyenga(eps_inclusion, eps_host, fraction):
@@ -96,6 +96,7 @@ def effective_permittivity(eps_inclusion, eps_host, fraction, method: str = "max
     **kwargs
         Passed to the method (``depolarization=``/``orientation=`` for
         ``maxwell_garnett_ellipsoid``, ``shape=`` for ``maxwell_garnett_shape``,
+        ``shapes=[inclusion_shape, host_shape]`` for ``bruggeman``,
         ``radius_nm=``/``wavelength_nm=`` for ``maxwell_garnett_mie``).
 
     Examples
