@@ -998,9 +998,13 @@ def interference_paint(tio2_thickness_nm: float = 120.0, mica_thickness_nm: floa
 
 
 def grey_metallic_paint() -> PaintBRDF:
-    """The seed paper's grey metallic paint (example 3): Al flakes, moderately aligned,
-    in a resin binder (n = 1.5) over a light-grey base, smooth clear coat."""
-    return metallic_paint(optical_depth=2.0, tilt=12.0, body_reflectance=0.3, name="grey metallic paint")
+    """The seed paper's grey metallic paint (example 3) in statistical form: Al flakes
+    (Rakić) with a Gaussian tilt of σ = 6°, optical depth τ = 0.5 (about what a 0.8 %
+    volume fraction of 20 µm × 300 nm flakes gives in the 20 µm layer), under a smooth
+    clear coat (n = 1.5) over a grey base (internal reflectance 0.35). For the version
+    built from an actual flake deposit see
+    :func:`nmmm.appearance.examples.grey_metallic_from_deposit`."""
+    return metallic_paint(optical_depth=0.5, tilt=6.0, body_reflectance=0.35, name="grey metallic paint")
 
 
 # --------------------------------------------------------------------------------------
