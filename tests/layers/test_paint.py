@@ -60,14 +60,48 @@ def test_lossless_film_on_white_substrate_reflects_everything():
         np.testing.assert_allclose(paint_reflectance(film, W, solver=solver).reflectance, 1.0, atol=1e-9)
 
 
-def test_hiding_and_comparison():
-    thin = dict(pigment=PIG, binder=N_B, distribution=monodisperse(D), volume_fraction=0.02, thickness_nm=2e3)
-    white = paint_reflectance(PaintFilm(**thin, substrate_reflectance=0.8), W, "ad").reflectance
-    black = paint_reflectance(PaintFilm(**thin, substrate_reflectance=0.0), W, "ad").reflectance
-    assert np.all(white > black)  # a thin film does not hide its substrate
-    c = compare_km_ad(PaintFilm(**thin, substrate_reflectance=0.8), W)
-    assert c["max_abs_difference"] == pytest.approx(np.max(np.abs(c["km"] - c["ad"])))
-    assert c["delta_e2000"] >= 0
+def _kubelka_1948(K, S, X, Rg):
+    """Kubelka (1948), eq. (7): reflectance of a layer of thickness X over a background Rg."""
+    a = 1 + K / S
+    b = np.sqrt(a * a - 1)
+    coth = 1 / np.tanh(b * S * X)
+    return (1 - Rg * (a - b * coth)) / (a - Rg + b * coth)
+
+
+def test_thin_film_over_a_substrate_against_iadpython_and_kubelka():
+    """A film that does not hide its substrate, index-matched to the ambient (n = 1, no
+    Fresnel surfaces: iadpython's slab is then exactly the film, at 16 quadrature points).
+
+    Adding–doubling reference: iadpython's slab (collimated R, T; diffuse R, T) plus a
+    Lambertian substrate rho summed over all round trips,
+    R = R_c + T_c rho T_d / (1 − rho R_d). Kubelka–Munk reference: Kubelka's (1948)
+    closed form with K = 2 μa, S = ¾ μs (1 − g) (Gate 1974) from miepython.
+    """
+    colour = pytest.importorskip("colour")
+    w = np.linspace(400.0, 700.0, 31)
+    f, X, rho = 0.02, 2e3, 0.8
+    film = PaintFilm(PIG, 1.0, monodisperse(D), f, X, substrate_reflectance=rho)
+    c = compare_km_ad(film, w)
+
+    qext, qsca, qback, g = miepython.efficiencies(np.full(w.size, PIG), np.full(w.size, D), w, n_env=1.0)
+    mu_s = f * 1.5 * qsca / D
+    mu_a = f * 1.5 * (qext - qsca) / D
+    ad = []
+    for i in range(w.size):
+        s = iad.Sample(a=mu_s[i] / (mu_a[i] + mu_s[i]), b=(mu_a[i] + mu_s[i]) * X, g=g[i], n=1.0,
+                       n_above=1.0, n_below=1.0, quad_pts=16)
+        ur1, ut1, uru, utu = s.rt()
+        ad.append(ur1 + ut1 * rho * utu / (1 - rho * uru))
+    km = _kubelka_1948(2 * mu_a, 0.75 * mu_s * (1 - g), X, rho)
+    np.testing.assert_allclose(c["ad"], ad, atol=3e-5)
+    np.testing.assert_allclose(c["km"], km, rtol=1e-9)
+    # the film does not hide its substrate: over black it reflects much less
+    black = _kubelka_1948(2 * mu_a, 0.75 * mu_s * (1 - g), X, 0.0)
+    assert np.all(km - black > 0.1)
+    assert c["max_abs_difference"] == pytest.approx(np.max(np.abs(km - np.asarray(ad))), abs=3e-5)
+    assert c["delta_e2000"] == pytest.approx(
+        float(colour.delta_E(c["lab_km"], c["lab_ad"], method="CIE 2000")), rel=1e-6
+    )
 
 
 @pytest.mark.parametrize(
