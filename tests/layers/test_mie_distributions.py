@@ -82,6 +82,40 @@ def test_percus_yevick_dilute_and_bad_input():
         percus_yevick_structure_factor(1.0, -0.1)
 
 
+def _wertheim_structure_factor(qd, f):
+    """S(q) = 1/(1 − ρ ĉ(q)) with Wertheim's (1963) c(r), Fourier transformed by quadrature."""
+    l1 = (1 + 2 * f) ** 2 / (1 - f) ** 4
+    l2 = -((1 + f / 2) ** 2) / (1 - f) ** 4
+    rho = 6 * f / np.pi
+    fun = lambda r: (-l1 - 6 * f * l2 * r - f * l1 / 2 * r**3) * np.sinc(qd * r / np.pi) * 4 * np.pi * r * r
+    return 1 / (1 - rho * quad(fun, 0, 1, limit=200)[0])
+
+
+def test_dependent_scattering_against_miepython_and_wertheim():
+    """Ishimaru & Kuga (1982): the dense medium's scattering is the single-particle
+    differential cross section weighted by S(q), q = 2k sin(θ/2), integrated over angles.
+    Reference: miepython's S1, S2 and Wertheim's S(q), integrated here by Gauss–Legendre;
+    in the Rayleigh limit the ratio tends to S(0) = (1 − f)⁴/(1 + 2f)² (PY compressibility)."""
+    miepython = pytest.importorskip("miepython")
+    f, n_med, m_p, wl = 0.2, 1.55, 2.9 + 0.1j, 550.0
+    mu, wq = np.polynomial.legendre.leggauss(96)
+    k = 2 * np.pi * n_med / wl
+    for D in (10.0, 180.0):
+        x = np.pi * D * n_med / wl
+        s1, s2 = miepython.S1_S2(m_p / n_med, x, mu, norm="wiscombe")
+        phase = np.abs(s1) ** 2 + np.abs(s2) ** 2
+        S = np.array([_wertheim_structure_factor(2 * k * np.sqrt((1 - m) / 2) * D, f) for m in mu])
+        ratio = np.sum(wq * phase * S) / np.sum(wq * phase)
+        g_ref = np.sum(wq * phase * S * mu) / np.sum(wq * phase * S)
+        ind = pigment_optics(m_p, n_med, monodisperse(D), [wl])
+        dense = pigment_optics(m_p, n_med, monodisperse(D), [wl], dependent_scattering_fraction=f)
+        assert float(dense.scattering_per_nm[0]) == pytest.approx(float(ind.scattering_per_nm[0]) * ratio, rel=1e-6)
+        assert float(dense.g[0]) == pytest.approx(g_ref, rel=1e-6, abs=1e-9)
+        np.testing.assert_allclose(dense.absorption_per_nm, ind.absorption_per_nm, rtol=1e-12)
+        if D == 10.0:
+            assert ratio == pytest.approx((1 - f) ** 4 / (1 + 2 * f) ** 2, rel=0.01)
+
+
 def test_monodisperse_cross_sections_per_volume_against_miepython():
     miepython = pytest.importorskip("miepython")
     w = np.array([450.0, 550.0, 650.0])
