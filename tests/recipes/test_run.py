@@ -1,0 +1,130 @@
+"""`nmmm run` end to end on the shipped recipes (fast settings), checked against
+independent computations: Maxwell Garnett (seed eq. 2) and Beer–Lambert + Fresnel written
+here, the `tmm` package for the interference stack, and the seed paper's qualitative claims."""
+
+import csv
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from nmmm.recipes.run import run_recipe
+from nmmm.recipes.schema import set_key
+
+from .conftest import fast_raw
+
+
+def _csv(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_gold_ruby_glass_matches_maxwell_garnett_and_beer_lambert(tmp_path):
+    from nmmm.materials import get
+
+    raw = fast_raw("gold_ruby_glass", step_nm=5.0)
+    res = run_recipe(raw, tmp_path, progress=False)
+    for f in ("spectra_csv", "colours_csv", "netcdf", "spectra plot", "nk plot", "report"):
+        assert f in res.files
+    ds = xr.open_dataset(tmp_path / "results.nc", engine="h5netcdf")
+    w = ds["wavelength_nm"].values
+    # seed paper eq. (2), written independently here
+    em = get("main/SiO2/Malitson").eps(w)
+    ei = get("main/Au/Johnson").eps(w)
+    p = 0.0005
+    ee = em * ((1 + 2 * p) * ei + 2 * (1 - p) * em) / ((1 - p) * ei + (2 + p) * em)
+    nk = np.sqrt(ee)
+    ruby = list(ds["compound"].values).index("ruby_glass")
+    np.testing.assert_allclose(ds["n"].values[ruby], nk.real, rtol=1e-10)
+    np.testing.assert_allclose(ds["k"].values[ruby], nk.imag, rtol=1e-6)
+    # 1 mm plate in air: Fresnel at both faces, Beer-Lambert inside, incoherent multiple reflections
+    d = 1e6
+    R = np.abs((nk - 1) / (nk + 1)) ** 2
+    a = np.exp(-4 * np.pi * nk.imag * d / w)
+    T = (1 - R) ** 2 * a / (1 - R**2 * a**2)
+    spec = list(ds["spectrum"].values)
+    np.testing.assert_allclose(ds["spectra"].values[spec.index("transmittance ruby_glass (1 mm)")], T, rtol=1e-6, atol=1e-15)
+    # the absorption band of the seed paper: near 520-530 nm
+    k = ds["k"].values[ruby]
+    assert 515 <= w[np.argmax(k)] <= 535
+    # the CSV holds the same numbers
+    rows = _csv(tmp_path / "spectra.csv")
+    col = "transmittance ruby_glass (1 mm) [1]"
+    np.testing.assert_allclose([float(r[col]) for r in rows], T, rtol=1e-5, atol=1e-12)
+    # red-purple in transmission at 0.1 mm (hue within 330-30 deg, chroma >= 20)
+    lab = [c for c in res.colours if c["spectrum"] == "transmittance ruby_glass (0.1 mm)" and c["illuminant"] == "D65"][0]
+    assert (lab["h_deg"] >= 330 or lab["h_deg"] < 30) and lab["C"] >= 20
+    ds.close()
+
+
+def test_interference_pigment_matches_tmm(tmp_path):
+    tmm = pytest.importorskip("tmm")
+    from nmmm.materials import get
+    from nmmm.materials.models import Cauchy
+
+    raw = fast_raw("interference_pigment", step_nm=20.0)
+    res = run_recipe(raw, tmp_path, progress=False)
+    w = res.wavelength_nm
+    tio2 = get("main/TiO2/Jolivet-anatase").nk(w)
+    mica = Cauchy(A=1.5685, B=0.0040).nk(w)
+    for angle in (0.0, 45.0):
+        ref = []
+        for i, lam in enumerate(w):
+            n_list = [1.0, 1.5, tio2[i], mica[i], tio2[i], 1.5]
+            d_list = [np.inf, 20000.0, 120.0, 400.0, 120.0, np.inf]
+            c_list = ["i", "i", "c", "i", "c", "i"]
+            th = np.radians(angle)
+            ref.append(0.5 * (tmm.inc_tmm("s", n_list, d_list, c_list, th, lam)["R"]
+                              + tmm.inc_tmm("p", n_list, d_list, c_list, th, lam)["R"]))
+        np.testing.assert_allclose(res.spectra[f"reflectance ({angle:g}° incidence)"], ref, rtol=1e-6, atol=1e-9)
+
+
+def test_hematite_paint_reads_red_and_bigger_grains_look_darker(tmp_path):
+    raw = fast_raw("hematite_paint", step_nm=20.0)
+    res = run_recipe(raw, tmp_path / "a", progress=False)
+    lab = next(c for c in res.colours if c["spectrum"] == res.primary and c["illuminant"] == "D65")
+    assert lab["h_deg"] < 70 and lab["C"] > 15  # rusty red: hue between red and orange
+    white, black = res.spectra[res.primary], res.spectra["reflectance (black substrate)"]
+    assert np.all(black <= white + 1e-12)
+    assert np.all((white >= 0) & (white <= 1))
+    big = run_recipe(set_key(raw, "pigment.body_diagonal_nm", 1000.0), tmp_path / "b", progress=False, report=False)
+    assert big.scalars["L_D65"] < res.scalars["L_D65"]  # seed paper: bigger grains look darker
+    assert big.scalars["equivalent_diameter_nm"] == pytest.approx(1000 / np.sqrt(3) * (6 / np.pi) ** (1 / 3))
+
+
+def test_grey_metallic_multiangle_and_stereo(tmp_path):
+    raw = fast_raw("grey_metallic", step_nm=40.0)
+    res = run_recipe(raw, tmp_path, progress=False)
+    L = [r["L"] for r in res.multiangle]
+    assert [r["aspecular_deg"] for r in res.multiangle] == [15, 25, 45, 75, 110]
+    assert all(a > b for a, b in zip(L, L[1:]))  # metallic flop: lighter near the specular direction
+    assert res.scalars["flop_index"] > 0
+    left, right = res.images["left eye"], res.images["right eye"]
+    assert left.shape == right.shape == (20, 30, 3)
+    assert np.abs(left - right).max() > 0.01  # the two eyes see the flakes' lobe at different places
+    assert "stereo pair" in res.files
+    ds = xr.open_dataset(tmp_path / "results.nc", engine="h5netcdf")
+    assert ds["multiangle_lab"].shape == (5, 3)
+    ds.close()
+
+
+def test_fft_level_runs_and_lies_between_wiener_bounds(tmp_path):
+    """A micro level homogenized by FFT: the effective permittivity of a lossless mixture
+    must lie between the Wiener bounds (arithmetic and harmonic means)."""
+    raw = {
+        "name": "FFT level",
+        "spectral": {"start_nm": 400, "stop_nm": 700, "step_nm": 50},
+        "compounds": {"resin": {"n": 1.5}, "titania": {"n": 2.5}},
+        "levels": [{"name": "composite", "scale": "micro", "host": "resin", "method": "fft", "fft_step_nm": 150,
+                    "inclusions": [{"compound": "titania", "fraction": 0.2, "radius_nm": 8}],
+                    "microstructure": {"model": "hardcore", "size_px": 24, "voxel_nm": 2.0, "seed": 1}}],
+        "plate": {"compound": "composite", "thickness_nm": [1000.0]},
+        "outputs": {"plots": False, "netcdf": False, "report": False},
+    }
+    res = run_recipe(raw, tmp_path, progress=False)
+    eps = res.materials["composite"] ** 2
+    assert np.all(np.abs(eps.imag) < 1e-6)
+    lo = 1 / (0.8 / 1.5**2 + 0.2 / 2.5**2)
+    hi = 0.8 * 1.5**2 + 0.2 * 2.5**2
+    # the cell's actual fraction differs a little from 0.2; allow for it in the bounds
+    assert np.all((eps.real > lo - 0.05) & (eps.real < hi + 0.05))
