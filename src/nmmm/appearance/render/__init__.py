@@ -1,0 +1,55 @@
+"""nmmm.appearance.render — spectral images of painted plates and objects.
+
+- :mod:`~nmmm.appearance.render.lights` — spectral light sources (CIE illuminants, CSV files).
+- :mod:`~nmmm.appearance.render.camera` — pinhole cameras, stereo pairs.
+- :mod:`~nmmm.appearance.render.plate` — NumPy/Numba plate renderer with discrete flakes.
+- :mod:`~nmmm.appearance.render.exr` — spectral OpenEXR (Fichet et al. 2021 layout).
+- :mod:`~nmmm.appearance.render.mitsuba_paint` — Mitsuba 3 plugins (optional extra).
+"""
+
+from nmmm.appearance.render.camera import PinholeCamera, stereo_pair
+from nmmm.appearance.render.exr import (
+    parse_spectral_channel,
+    read_spectral_exr,
+    spectral_channel_name,
+    write_spectral_exr,
+)
+from nmmm.appearance.render.lights import (
+    DirectionalLight,
+    PointLight,
+    SpectralPowerDistribution,
+    UniformEnvironment,
+    default_wavelengths,
+    read_spd_csv,
+    spd,
+)
+from nmmm.appearance.render.plate import (
+    LambertianBRDF,
+    PaintedPlate,
+    SpectralImage,
+    render_plate,
+    render_stereo_plate,
+    seed_metallic_plate,
+)
+
+__all__ = [
+    "PinholeCamera",
+    "stereo_pair",
+    "parse_spectral_channel",
+    "read_spectral_exr",
+    "spectral_channel_name",
+    "write_spectral_exr",
+    "DirectionalLight",
+    "PointLight",
+    "SpectralPowerDistribution",
+    "UniformEnvironment",
+    "default_wavelengths",
+    "read_spd_csv",
+    "spd",
+    "LambertianBRDF",
+    "PaintedPlate",
+    "SpectralImage",
+    "render_plate",
+    "render_stereo_plate",
+    "seed_metallic_plate",
+]
