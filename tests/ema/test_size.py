@@ -60,8 +60,10 @@ def test_red_shift_with_size(gold_silica):
 
 
 def test_warnings_and_errors():
-    with pytest.warns(SizeValidityWarning, match="size parameter"):
+    with pytest.warns(SizeValidityWarning) as record:
         maxwell_garnett_mie(-5 + 2j, 2.25, 0.01, 150.0, 500.0)
+    messages = " ".join(str(r.message) for r in record)
+    assert "size parameter" in messages and "quadrupole" in messages
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         maxwell_garnett_mie(-5 + 2j, 2.25, 0.01, 20.0, 500.0)
@@ -72,3 +74,23 @@ def test_warnings_and_errors():
         size_parameter(-1.0, 500.0, 2.25)
     with pytest.raises(InvalidInputError):
         mie_a1(1.5 - 0.1j, 1.0)
+
+
+@pytest.mark.parametrize("m,x", [(1.5 + 0.1j, 1.0), (0.2 + 3.5j, 0.5), (0.3 + 2j, 3.0), (2.9 + 0.3j, 0.8)])
+def test_low_orders_match_miepython(m, x):
+    from nmmm.ema import mie_low_orders
+
+    a, b = miepython.an_bn(m, x, 2)
+    np.testing.assert_allclose(mie_low_orders(m, x), [a[0], b[0], a[1], b[1]], rtol=1e-10)
+
+
+def test_neglected_multipoles_warning(gold_silica):
+    from nmmm.ema import check_dipole_validity, neglected_multipole_fraction
+
+    w, _, _, ea, es = gold_silica
+    small = neglected_multipole_fraction(ea, es, 5.0, w)
+    big = neglected_multipole_fraction(ea, es, 45.0, w)
+    assert small.max() < 0.01 and big.max() > 0.1  # the quadrupole appears for ~90 nm gold
+    with pytest.warns(SizeValidityWarning) as record:
+        check_dipole_validity(ea, es, 45.0, w)
+    assert any("quadrupole" in str(r.message) for r in record)

@@ -48,17 +48,20 @@ from nmmm.ema.shapes import (
 )
 from nmmm.ema.size import (
     SizeValidityWarning,
+    check_dipole_validity,
     check_quasi_static,
     dipole_polarizability_mie,
     maxwell_garnett_mie,
     mie_a1,
+    mie_low_orders,
+    neglected_multipole_fraction,
     size_parameter,
 )
 
 __all__ = [
     "BoundingRegion", "CUBE_DEPOLARIZATION", "EFFECTIVE_PERMITTIVITY_METHODS", "Inclusion", "Shape",
     "SizeValidityWarning", "bergman_milton_bounds", "bruggeman", "bruggeman_residual",
-    "check_quasi_static", "cube_polarizability", "dipole_polarizability_mie", "effective_permittivity",
+    "check_dipole_validity", "check_quasi_static", "mie_low_orders", "neglected_multipole_fraction", "cube_polarizability", "dipole_polarizability_mie", "effective_permittivity",
     "ellipsoid_depolarization", "ellipsoid_polarizability", "hashin_shtrikman_bounds", "looyenga",
     "maxwell_garnett", "maxwell_garnett_ellipsoid", "maxwell_garnett_mie", "maxwell_garnett_multi",
     "maxwell_garnett_polarizability", "maxwell_garnett_shape", "mie_a1", "mix", "mix_tensor",

@@ -18,7 +18,8 @@ is the intersection of the components' ranges.
 
 Size checks: when an :class:`Inclusion` has ``radius_nm``, quasi-static methods warn
 (:class:`~nmmm.ema.size.SizeValidityWarning`) at evaluation if x = 2π n_m r/λ > 0.2 and
-``"maxwell_garnett_mie"`` if x > 1 (see :mod:`nmmm.ema.size`).
+``"maxwell_garnett_mie"`` if x > 1 or the neglected multipoles exceed 5 % of the extinction
+(see :mod:`nmmm.ema.size`).
 
 References: Maxwell Garnett (1904); Bruggeman (1935); Doyle (1989); Sihvola (1999) —
 see the formula modules.
@@ -36,8 +37,8 @@ from nmmm.ema.maxwell_garnett import maxwell_garnett_multi, maxwell_garnett_pola
 from nmmm.ema.registry import canonical_method
 from nmmm.ema.shapes import Shape
 from nmmm.ema.size import (
-    MAX_SIZE_PARAMETER_DIPOLE,
     MAX_SIZE_PARAMETER_QUASI_STATIC,
+    check_dipole_validity,
     _warn_size,
     dipole_polarizability_mie,
     size_parameter,
@@ -104,11 +105,11 @@ def _eps_function(host, incs, method, orientation):
     def eps(w_nm):
         em = host.eps(w_nm)
         epss = [inc.material.eps(w_nm) for inc in incs]
-        for inc in incs:
+        for inc, e_inc in zip(incs, epss):
             if inc.radius_nm is not None:
                 x = size_parameter(inc.radius_nm, w_nm, em)
                 if method == "maxwell_garnett_mie":
-                    _warn_size(x, MAX_SIZE_PARAMETER_DIPOLE, "the dipole (a1) size-corrected Maxwell Garnett theory", 4)
+                    check_dipole_validity(e_inc, em, inc.radius_nm, w_nm, stacklevel=5)
                 else:
                     _warn_size(x, MAX_SIZE_PARAMETER_QUASI_STATIC,
                                f"the quasi-static '{method}' formula (try method='maxwell_garnett_mie')", 4)

@@ -8,6 +8,8 @@
 - :func:`maxwell_garnett_mie` — Maxwell Garnett with that polarizability (Doyle 1989),
   warning (:class:`SizeValidityWarning`) when x leaves the range of the dipole theory.
 - :func:`check_quasi_static` — warn when particles are too large for the quasi-static formulas.
+- :func:`mie_low_orders`, :func:`neglected_multipole_fraction`, :func:`check_dipole_validity` —
+  what the dipole theory leaves out (b1, a2, b2), and the warning built on it.
 
 Notes
 -----
@@ -17,10 +19,12 @@ particle: their error on the dipole grows as x² (x = 2π n_m r/λ) — about 1 
 Doyle's extended Maxwell Garnett theory keeps the Clausius–Mossotti structure and takes
 the dipole polarizability from the exact Mie coefficient a1, which includes both. It still
 neglects the magnetic dipole b1 and the electric quadrupole a2, which grow as x² relative
-to a1; Ruppin (2000) found it the most accurate of the extended MG theories, and nmmm
-states its validity as x <= 1 (``max_size_parameter``), beyond which
-:class:`SizeValidityWarning` is issued (use full Mie scattering with radiative transfer in
-:mod:`nmmm.layers` there). Im ε of the result describes the *extinction* of the coherent
+to a1; Ruppin (2000) found it the most accurate of the extended MG theories. nmmm computes
+what it neglects — the share of the sphere's extinction carried by b1, a2 and b2
+(:func:`neglected_multipole_fraction`, closed forms of order ≤ 2) — and issues
+:class:`SizeValidityWarning` when it exceeds 5 % or when x > 1 (use full Mie scattering with
+radiative transfer in :mod:`nmmm.layers` there). For gold in silica this allows radii up to
+about 30 nm across the visible. Im ε of the result describes the *extinction* of the coherent
 beam (absorption and scattering out of it), the quantity for transmission through a
 non-turbid layer.
 
@@ -51,6 +55,8 @@ from nmmm.spectra import as_wavelength_nm, check_finite, check_positive
 MAX_SIZE_PARAMETER_DIPOLE = 1.0
 #: Default largest size parameter for the quasi-static formulas (≈ 3 % error on the dipole).
 MAX_SIZE_PARAMETER_QUASI_STATIC = 0.2
+#: Default largest share of extinction the dipole theory may neglect (b1, a2, b2).
+MAX_NEGLECTED_MULTIPOLE_FRACTION = 0.05
 #: Below this x, a1 is computed from its series (the closed form cancels).
 _X_SERIES = 1e-3
 
@@ -92,6 +98,56 @@ def _log_derivative_1(z):
     for large Im z."""
     cot = 1 / np.tan(z)
     return -1 / z + 1 / (1 / z - cot)
+
+
+def _psi2(z):
+    return (3 / z**2 - 1) * np.sin(z) - 3 * np.cos(z) / z
+
+
+def _xi2(z):
+    """ξ_2 = z h_2^(1)(z) = ψ_2 − i χ_2 with χ_2 = (3/z² − 1) cos z + 3 sin z / z."""
+    return _psi2(z) - 1j * ((3 / z**2 - 1) * np.cos(z) + 3 * np.sin(z) / z)
+
+
+def mie_low_orders(m, x):
+    """Mie coefficients a1, b1, a2, b2 of a sphere (closed forms, Bohren & Huffman eq. 4.88):
+
+    ``a_n = [(D_n(mx)/m + n/x) ψ_n(x) − ψ_{n−1}(x)] / [(D_n(mx)/m + n/x) ξ_n(x) − ξ_{n−1}(x)]``,
+    ``b_n = [(m D_n(mx) + n/x) ψ_n(x) − ψ_{n−1}(x)] / [(m D_n(mx) + n/x) ξ_n(x) − ξ_{n−1}(x)]``,
+    with D_2(z) = −2/z + 1/(2/z − D_1(z)). Used to measure what the dipole theory neglects.
+    Returns four arrays of the broadcast shape of ``m`` and ``x`` (x not too small: > 1e-3).
+    """
+    m = check_finite(m, "m").astype(complex)
+    x = check_positive(x, "x")
+    m, x = np.broadcast_arrays(m, x)
+    z = m * x
+    D1 = _log_derivative_1(z)
+    D2 = -2 / z + 1 / (2 / z - D1)
+    psi0, psi1, psi2 = _psi(x, 0), _psi(x, 1), _psi2(x)
+    xi0, xi1, xi2 = _xi(x, 0), _xi(x, 1), _xi2(x)
+    out = []
+    for D, n, psi_n, psi_m, xi_n, xi_m in ((D1, 1, psi1, psi0, xi1, xi0), (D2, 2, psi2, psi1, xi2, xi1)):
+        ga = D / m + n / x
+        gb = m * D + n / x
+        out.append(((ga * psi_n - psi_m) / (ga * xi_n - xi_m), (gb * psi_n - psi_m) / (gb * xi_n - xi_m)))
+    (a1, b1), (a2, b2) = out
+    return a1, b1, a2, b2
+
+
+def neglected_multipole_fraction(eps_inclusion, eps_host, radius_nm, wavelength_nm) -> np.ndarray:
+    """Share of the sphere's extinction (through order 2) that the electric-dipole theory
+    leaves out: ``(3 Re b1 + 5 Re(a2 + b2)) / (3 Re(a1 + b1) + 5 Re(a2 + b2))``
+    (extinction efficiency ∝ Σ (2n+1) Re(a_n + b_n), Bohren & Huffman eq. 4.62)."""
+    ei = as_eps(eps_inclusion, "eps_inclusion")
+    em = as_eps(eps_host, "eps_host")
+    x = size_parameter(radius_nm, wavelength_nm, em)
+    m = np.sqrt(ei) / np.sqrt(em)
+    m = np.where(m.imag < 0, m.real + 0j, m)
+    x = np.maximum(x, _X_SERIES)  # below, the neglected share is ~x² and immaterial
+    a1, b1, a2, b2 = mie_low_orders(m, x)
+    neglected = 3 * b1.real + 5 * (a2.real + b2.real)
+    total = 3 * (a1.real + b1.real) + 5 * (a2.real + b2.real)
+    return np.abs(neglected) / np.maximum(np.abs(total), 1e-300)
 
 
 def mie_a1(m, x) -> np.ndarray:
@@ -155,25 +211,49 @@ def check_quasi_static(radius_nm, wavelength_nm, eps_host,
     return x
 
 
+def check_dipole_validity(eps_inclusion, eps_host, radius_nm, wavelength_nm,
+                          max_size_parameter: float = MAX_SIZE_PARAMETER_DIPOLE,
+                          max_neglected: float = MAX_NEGLECTED_MULTIPOLE_FRACTION, stacklevel: int = 3):
+    """Warn (:class:`SizeValidityWarning`) where the dipole (a1) theory is out of its range:
+    size parameter above ``max_size_parameter`` or neglected multipoles (b1, a2, b2) carrying
+    more than ``max_neglected`` of the extinction (:func:`neglected_multipole_fraction`)."""
+    x = size_parameter(radius_nm, wavelength_nm, eps_host)
+    _warn_size(x, max_size_parameter, "the dipole (a1) size-corrected Maxwell Garnett theory", stacklevel + 1)
+    share = neglected_multipole_fraction(eps_inclusion, eps_host, radius_nm, wavelength_nm)
+    worst = float(np.max(share)) if np.size(share) else 0.0
+    if worst > max_neglected:
+        warnings.warn(
+            f"the magnetic dipole and electric/magnetic quadrupole terms carry up to {100 * worst:.0f} % of the "
+            f"extinction (limit {100 * max_neglected:g} %), which the dipole (a1) size-corrected Maxwell Garnett "
+            "theory neglects; use smaller particles or full Mie scattering with radiative transfer (nmmm.layers)",
+            SizeValidityWarning, stacklevel=stacklevel)
+    return share
+
+
 def maxwell_garnett_mie(eps_inclusion, eps_host, fraction, radius_nm, wavelength_nm,
-                        max_size_parameter: float = MAX_SIZE_PARAMETER_DIPOLE) -> np.ndarray:
+                        max_size_parameter: float = MAX_SIZE_PARAMETER_DIPOLE,
+                        max_neglected: float = MAX_NEGLECTED_MULTIPOLE_FRACTION) -> np.ndarray:
     """Size-corrected Maxwell Garnett (Doyle 1989) for spheres of radius ``radius_nm``:
 
     ``eps = eps_m (1 + 2 p alpha/3) / (1 − p alpha/3)``, ``alpha = 9 i a1 / (2 x³)``,
     with a1 the first electric Mie coefficient (:func:`mie_a1`) at size parameter
     x = 2π n_m r / λ. Equals eq. (2) as r → 0. Warns with :class:`SizeValidityWarning`
-    when x exceeds ``max_size_parameter`` (module notes). All arguments broadcast.
+    when x exceeds ``max_size_parameter`` or the neglected multipoles exceed ``max_neglected``
+    of the extinction (:func:`check_dipole_validity`). All arguments broadcast.
     """
     from nmmm.ema.maxwell_garnett import maxwell_garnett_polarizability
 
     p = as_fraction(fraction)
     alpha = dipole_polarizability_mie(eps_inclusion, eps_host, radius_nm, wavelength_nm)
-    _warn_size(size_parameter(radius_nm, wavelength_nm, eps_host), max_size_parameter,
-               "the dipole (a1) size-corrected Maxwell Garnett theory")
+    check_dipole_validity(eps_inclusion, eps_host, radius_nm, wavelength_nm, max_size_parameter, max_neglected)
     return maxwell_garnett_polarizability(eps_host, p, alpha)
 
 
 __all__ = [
+    "MAX_NEGLECTED_MULTIPOLE_FRACTION",
+    "check_dipole_validity",
+    "mie_low_orders",
+    "neglected_multipole_fraction",
     "MAX_SIZE_PARAMETER_DIPOLE",
     "MAX_SIZE_PARAMETER_QUASI_STATIC",
     "SizeValidityWarning",
