@@ -298,7 +298,11 @@ def gold_ruby_demo(output_dir) -> dict:
             warnings.simplefilter("ignore")
             m = gold_ruby_glass(radius_nm=r, method="maxwell_garnett_mie")
             k = m.k(w_s)
-        size_rows.append({"radius_nm": r, "peak_nm": float(w_s[np.argmax(k)]), "k_peak": float(k.max())})
+        from nmmm.ema.size import neglected_multipole_fraction
+
+        share = neglected_multipole_fraction(gold.eps(w_s), silica.eps(w_s), r, w_s)
+        size_rows.append({"radius_nm": r, "peak_nm": float(w_s[np.argmax(k)]), "k_peak": float(k.max()),
+                          "neglected_multipoles_max": float(share.max())})
     tables["size_correction"] = size_rows
 
     d65_1mm = _colour(w, plate_transmittance(nk, w, 1e6), "D65")[0]
@@ -314,7 +318,9 @@ def gold_ruby_demo(output_dir) -> dict:
         f"{lab5['A'][0]:.2f} (A). Gold rods move the longitudinal resonance to "
         + ", ".join(f"{r['peak_long_nm']:.0f} nm (AR {r['aspect_ratio']:g})" for r in rod_rows)
         + "; their colours change accordingly. Size correction (Doyle 1989, first Mie coefficient): peak at "
-        + ", ".join(f"{r['peak_nm']:.0f} nm for r = {r['radius_nm']:g} nm" for r in size_rows) + "."
+        + ", ".join(f"{r['peak_nm']:.0f} nm for r = {r['radius_nm']:g} nm "
+                    f"(neglected multipoles ≤ {100 * r['neglected_multipoles_max']:.0f} % of extinction)"
+                    for r in size_rows) + "."
     )
     tables["summary"] = {
         "plasmon_peak_nm": peak_nm,
