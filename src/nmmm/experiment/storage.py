@@ -129,8 +129,10 @@ def assign_trials(pair_ids, repetitions: int, seed: int) -> list[tuple[str, int,
 class ResponseStore:
     """Participants, trials and responses in one SQLite file (WAL mode, one commit per response).
 
-    Thread-safe: one connection guarded by a lock (the web server calls it from worker
-    threads). Open one store per process; other processes may read the file concurrently.
+    Thread-safe: writes go through one connection guarded by a lock (the web server calls the
+    store from worker threads); reads use one read-only connection per thread, which in WAL
+    mode never wait for a commit in progress. Run one server per database; other processes may
+    read the file concurrently.
     """
 
     def __init__(self, db_path, *, synchronous: str = "FULL"):
@@ -138,6 +140,9 @@ class ResponseStore:
         if self.db_path.parent and not self.db_path.parent.exists():
             raise DataFileError(f"directory of the response database {str(self.db_path)!r} does not exist")
         self._lock = threading.Lock()
+        self._local = threading.local()
+        self._readers: list[sqlite3.Connection] = []
+        self._closed = False
         try:
             self._con = sqlite3.connect(str(self.db_path), check_same_thread=False, isolation_level=None,
                                         timeout=30.0)
@@ -154,6 +159,10 @@ class ResponseStore:
 
     def close(self):
         with self._lock:
+            self._closed = True
+            for con in self._readers:
+                con.close()
+            self._readers.clear()
             self._con.close()
 
     def __enter__(self):
@@ -174,9 +183,23 @@ class ResponseStore:
             self._con.execute("COMMIT")
             return out
 
+    def _reader(self) -> sqlite3.Connection:
+        """This thread's read-only connection: WAL readers never wait for the writer's fsync."""
+        con = getattr(self._local, "con", None)
+        if con is None:
+            # check_same_thread=False only so that close() may close it from another thread
+            con = sqlite3.connect(str(self.db_path), isolation_level=None, timeout=30.0, check_same_thread=False)
+            con.execute("PRAGMA query_only=ON")
+            con.row_factory = sqlite3.Row
+            self._local.con = con
+            with self._lock:
+                self._readers.append(con)
+        return con
+
     def _read(self, sql, args=()):
-        with self._lock:
-            return [dict(r) for r in self._con.execute(sql, args).fetchall()]
+        if self._closed:
+            raise DataFileError(f"the response store {str(self.db_path)!r} is closed")
+        return [dict(r) for r in self._reader().execute(sql, args).fetchall()]
 
     # -- pairs --------------------------------------------------------------------------
     def register_pairs(self, pairset):
