@@ -111,8 +111,22 @@ def n_cos_theta(n, n_sin_theta):
     return np.where(flip, -q, q)
 
 
+class UnpolarizedPower:
+    """Unpolarized power of anything with ``Rs, Rp, Ts, Tp``: the mean of s and p."""
+
+    @property
+    def R(self) -> np.ndarray:
+        """Unpolarized reflectance ``(Rs + Rp)/2``."""
+        return 0.5 * (self.Rs + self.Rp)
+
+    @property
+    def T(self) -> np.ndarray:
+        """Unpolarized transmittance ``(Ts + Tp)/2``."""
+        return 0.5 * (self.Ts + self.Tp)
+
+
 @dataclass(frozen=True)
-class FresnelCoefficients:
+class FresnelCoefficients(UnpolarizedPower):
     """Amplitude coefficients of one interface (see module docstring for conventions).
 
     Attributes
@@ -157,16 +171,6 @@ class FresnelCoefficients:
         num = (self.n2 * np.conj(self.cos_theta2)).real
         den = (self.n1 * np.conj(self.cos_theta1)).real
         return np.abs(self.tp) ** 2 * num / den
-
-    @property
-    def R(self) -> np.ndarray:
-        """Unpolarized reflectance ``(Rs + Rp)/2``."""
-        return 0.5 * (self.Rs + self.Rp)
-
-    @property
-    def T(self) -> np.ndarray:
-        """Unpolarized transmittance ``(Ts + Tp)/2``."""
-        return 0.5 * (self.Ts + self.Tp)
 
 
 def fresnel(n1, n2, angle_deg) -> FresnelCoefficients:

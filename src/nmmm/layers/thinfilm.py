@@ -66,7 +66,7 @@ import numba
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.fresnel import check_angle_deg, n_cos_theta
+from nmmm.layers.fresnel import UnpolarizedPower, check_angle_deg, n_cos_theta
 from nmmm.spectra import as_wavelength_nm, check_finite, check_nk, check_positive
 
 __all__ = ["Layer", "Stack", "StackResult", "coherent_rt", "NUMBA_MIN_POINTS"]
@@ -187,7 +187,7 @@ def _as_layer(spec) -> Layer:
 
 
 @dataclass(frozen=True)
-class StackResult:
+class StackResult(UnpolarizedPower):
     """Reflection and transmission of a :class:`Stack`.
 
     Every array has shape ``thickness_shape + grid_shape`` (see :meth:`Stack.rt`).
@@ -219,16 +219,6 @@ class StackResult:
     tp: np.ndarray | None = None
     absorbed_s: np.ndarray | None = field(default=None, repr=False)
     absorbed_p: np.ndarray | None = field(default=None, repr=False)
-
-    @property
-    def R(self) -> np.ndarray:
-        """Unpolarized reflectance ``(Rs + Rp)/2``."""
-        return 0.5 * (self.Rs + self.Rp)
-
-    @property
-    def T(self) -> np.ndarray:
-        """Unpolarized transmittance ``(Ts + Tp)/2``."""
-        return 0.5 * (self.Ts + self.Tp)
 
     @property
     def As(self) -> np.ndarray:
@@ -388,38 +378,32 @@ class Stack:
         q_all = [n_amb * np.cos(theta)] + [n_cos_theta(n, beta) for n in n_lay + [n_sub]]
         k0 = 2 * np.pi / w_g
 
-        out = {}
         if all(coh):
-            for pol in ("s", "p"):
-                r, t, R, T, A = coherent_rt(n_all, q_all, d_lay, k0, pol, flux=layer_absorption)
-                out[pol] = (r, t, R, T, A)
-            b = _broadcaster(shape)
-            return StackResult(
-                wavelength_nm=w,
-                angle_deg=a,
-                Rs=b(out["s"][2]),
-                Rp=b(out["p"][2]),
-                Ts=b(out["s"][3]),
-                Tp=b(out["p"][3]),
-                rs=b(out["s"][0]),
-                rp=b(out["p"][0]),
-                ts=b(out["s"][1]),
-                tp=b(out["p"][1]),
-                absorbed_s=None if not layer_absorption else np.stack([b(x) for x in out["s"][4]]),
-                absorbed_p=None if not layer_absorption else np.stack([b(x) for x in out["p"][4]]),
-            )
-
-        res = {pol: _incoherent_rt(n_all, q_all, d_lay, coh, k0, pol, layer_absorption) for pol in ("s", "p")}
+            res = {pol: coherent_rt(n_all, q_all, d_lay, k0, pol, flux=layer_absorption) for pol in "sp"}
+        else:  # no phase for partly incoherent stacks: amplitudes stay None
+            res = {pol: (None, None) + _incoherent_rt(n_all, q_all, d_lay, coh, k0, pol, layer_absorption)
+                   for pol in "sp"}
         b = _broadcaster(shape)
+
+        def amp(pol, i):
+            return None if res[pol][i] is None else b(res[pol][i])
+
+        def absorbed(pol):
+            return np.stack([b(x) for x in res[pol][4]]) if layer_absorption else None
+
         return StackResult(
             wavelength_nm=w,
             angle_deg=a,
-            Rs=b(res["s"][0]),
-            Rp=b(res["p"][0]),
-            Ts=b(res["s"][1]),
-            Tp=b(res["p"][1]),
-            absorbed_s=None if not layer_absorption else np.stack([b(x) for x in res["s"][2]]),
-            absorbed_p=None if not layer_absorption else np.stack([b(x) for x in res["p"][2]]),
+            Rs=b(res["s"][2]),
+            Rp=b(res["p"][2]),
+            Ts=b(res["s"][3]),
+            Tp=b(res["p"][3]),
+            rs=amp("s", 0),
+            rp=amp("p", 0),
+            ts=amp("s", 1),
+            tp=amp("p", 1),
+            absorbed_s=absorbed("s"),
+            absorbed_p=absorbed("p"),
         )
 
 
