@@ -40,8 +40,7 @@ def _k_components(a, b, ny, has_ny, i1, i2, i3):
     return k1, k2, k3
 
 
-@njit(parallel=True, cache=True, fastmath=True)
-def project(F, a, b, ny, has_ny, mode):
+def _project(F, a, b, ny, has_ny, mode):
     """Apply Γ (mode 0) or I − 2Γ (mode 1) in place to F of shape (d, N1, N2, N3), d = 2 or 3."""
     d = F.shape[0]
     n1, n2, n3 = F.shape[1], F.shape[2], F.shape[3]
@@ -86,56 +85,117 @@ def project(F, a, b, ny, has_ny, mode):
     return F
 
 
-@njit(parallel=True, cache=True, fastmath=True)
+CHUNK = 1 << 15  # voxels per parallel work item (contiguous runs per component)
+SERIAL_BELOW = 1 << 17  # smaller fields run serially: a parallel launch costs more than it saves
+
+
+def _direction_and_eps(p, q, r, beta, labels, tab, update):
+    d, n = p.shape
+    nchunk = (n + CHUNK - 1) // CHUNK
+    part = np.zeros((nchunk, 2))
+    for c in prange(nchunk):
+        lo = c * CHUNK
+        hi = min(n, lo + CHUNK)
+        acc_re = 0.0
+        acc_im = 0.0
+        for j in range(d):
+            for i in range(lo, hi):
+                e = tab[labels[i]]
+                if update:
+                    v = r[j, i] + beta * p[j, i]
+                    p[j, i] = v
+                else:
+                    v = p[j, i]
+                ev = e * v
+                q[j, i] = ev
+                w = ev * v
+                acc_re += w.real
+                acc_im += w.imag
+        part[c, 0] = acc_re
+        part[c, 1] = acc_im
+    return part[:, 0].sum() + 1j * part[:, 1].sum()
+
+
+def _cocg_update(x, r, p, q, alpha):
+    d, n = x.shape
+    nchunk = (n + CHUNK - 1) // CHUNK
+    part = np.zeros((nchunk, 3))
+    for c in prange(nchunk):
+        lo = c * CHUNK
+        hi = min(n, lo + CHUNK)
+        rr_re = 0.0
+        rr_im = 0.0
+        nr = 0.0
+        for j in range(d):
+            for i in range(lo, hi):
+                x[j, i] = x[j, i] + alpha * p[j, i]
+                v = r[j, i] - alpha * q[j, i]
+                r[j, i] = v
+                vr = v.real
+                vi = v.imag
+                rr_re += vr * vr - vi * vi
+                rr_im += 2.0 * vr * vi
+                nr += vr * vr + vi * vi
+        part[c, 0] = rr_re
+        part[c, 1] = rr_im
+        part[c, 2] = nr
+    return part[:, 0].sum() + 1j * part[:, 1].sum(), part[:, 2].sum()
+
+
+def _eps_times(q, x, labels, tab, e0):
+    d, n = x.shape
+    nchunk = (n + CHUNK - 1) // CHUNK
+    for c in prange(nchunk):
+        lo = c * CHUNK
+        hi = min(n, lo + CHUNK)
+        for j in range(d):
+            for i in range(lo, hi):
+                q[j, i] = tab[labels[i]] * (e0[j] + x[j, i])
+    return q
+
+
+def _parallel(a) -> bool:
+    return a.size >= SERIAL_BELOW and numba.get_num_threads() > 1
+
+
+_dir_par = njit(parallel=True, cache=True, fastmath=True)(_direction_and_eps)
+_dir_ser = njit(cache=True, fastmath=True)(_direction_and_eps)
+_upd_par = njit(parallel=True, cache=True, fastmath=True)(_cocg_update)
+_upd_ser = njit(cache=True, fastmath=True)(_cocg_update)
+_eps_par = njit(parallel=True, cache=True)(_eps_times)
+_eps_ser = njit(cache=True)(_eps_times)
+
+
 def direction_and_eps(p, q, r, beta, labels, tab, update):
     """If ``update``: p ← r + β p. Then q ← ε p. Returns Σ ε p·p (bilinear, no conjugate)."""
-    d, n = p.shape
-    acc_re = 0.0
-    acc_im = 0.0
-    for j in range(d):
-        for i in prange(n):
-            e = tab[labels[i]]
-            if update:
-                v = r[j, i] + beta * p[j, i]
-                p[j, i] = v
-            else:
-                v = p[j, i]
-            ev = e * v
-            q[j, i] = ev
-            w = ev * v
-            acc_re += w.real
-            acc_im += w.imag
-    return acc_re + 1j * acc_im
+    f = _dir_par if _parallel(p) else _dir_ser
+    return f(p, q, r, beta, labels, tab, update)
 
 
-@njit(parallel=True, cache=True, fastmath=True)
 def cocg_update(x, r, p, q, alpha):
     """x ← x + α p; r ← r − α q. Returns (rᵀr, ‖r‖²)."""
-    d, n = x.shape
-    rr_re = 0.0
-    rr_im = 0.0
-    nr = 0.0
-    for j in range(d):
-        for i in prange(n):
-            x[j, i] = x[j, i] + alpha * p[j, i]
-            v = r[j, i] - alpha * q[j, i]
-            r[j, i] = v
-            vr = v.real
-            vi = v.imag
-            rr_re += vr * vr - vi * vi
-            rr_im += 2.0 * vr * vi
-            nr += vr * vr + vi * vi
-    return rr_re + 1j * rr_im, nr
+    f = _upd_par if _parallel(x) else _upd_ser
+    return f(x, r, p, q, alpha)
 
 
-@njit(parallel=True, cache=True)
 def eps_times(q, x, labels, tab, e0):
     """q ← ε (e0 + x) (e0 a constant vector)."""
-    d, n = x.shape
-    for j in range(d):
-        for i in prange(n):
-            q[j, i] = tab[labels[i]] * (e0[j] + x[j, i])
-    return q
+    f = _eps_par if _parallel(x) else _eps_ser
+    return f(q, x, labels, tab, e0)
+
+
+_proj_par = njit(parallel=True, cache=True, fastmath=True)(_project)
+_proj_ser = njit(cache=True, fastmath=True)(_project)
+
+
+def project(F, a, b, ny, has_ny, mode):
+    """Apply Γ (mode 0) or I − 2Γ (mode 1) in place to F of shape (d, N1, N2, N3), d = 2 or 3.
+
+    Γ(q) = k k^H / |k|² is evaluated on the fly from the per-axis factors ``a``, ``b``
+    (k_j = a_j Π_{l≠j} b_l), with the Nyquist rule of the spectral symbol when ``has_ny``.
+    """
+    f = _proj_par if _parallel(F) else _proj_ser
+    return f(F, a, b, ny, has_ny, mode)
 
 
 @njit(cache=True)
