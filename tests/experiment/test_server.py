@@ -25,7 +25,7 @@ def _answer(c, s, i, rid, choice="left"):
                   json={"response_id": rid, "trial_index": i, "choice": choice, "rt_ms": 500.0})
 
 
-def test_kill_mid_session_loses_nothing_and_participant_resumes(tmp_path, pairs_toml, server_factory):
+def test_kill_between_trials_loses_nothing_and_participant_resumes(tmp_path, pairs_toml, server_factory):
     db = tmp_path / "responses.sqlite"
     srv = server_factory(pairs_toml, db).start()
     with httpx.Client(base_url=srv.url, timeout=10) as c:
@@ -57,10 +57,10 @@ def test_kill_mid_session_loses_nothing_and_participant_resumes(tmp_path, pairs_
 
 
 def test_fifty_concurrent_participants_each_response_stored_once(tmp_path, server_factory):
-    toml = make_pairs(tmp_path, n_pairs=4, repetitions=2, blank_ms=0)   # 8 trials each
+    toml = make_pairs(tmp_path, n_pairs=3, repetitions=2, blank_ms=0)   # 6 trials each
     db = tmp_path / "load.sqlite"
     srv = server_factory(toml, db).start()
-    n_part, n_trials = 50, 8
+    n_part, n_trials = 50, 6
     limits = httpx.Limits(max_connections=64)
 
     shared = httpx.Client(base_url=srv.url, timeout=30, limits=limits)  # thread-safe; one pool
