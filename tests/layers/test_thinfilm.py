@@ -98,6 +98,13 @@ def test_single_interface_equals_fresnel():
     np.testing.assert_allclose(res.rs[:, 0], -res.rp[:, 0], atol=1e-14)  # rp = -rs at normal incidence
 
 
+def test_bare_interface_with_layer_absorption_has_no_layers():
+    # no layers: nothing absorbed between the media, R + T = 1 (lossless, Born & Wolf §1.5)
+    res = Stack([], substrate=1.5).rt(WL, ANG, layer_absorption=True)
+    assert res.absorbed.shape == (0,) + res.R.shape
+    np.testing.assert_allclose(res.R + res.T, 1.0, atol=1e-14)
+
+
 def test_brewster_angle_uncoated():
     # tan(theta_B) = n2/n1: Rp vanishes for the bare interface
     theta_b = np.degrees(np.arctan(1.5 / 1.0))

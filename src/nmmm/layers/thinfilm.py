@@ -389,7 +389,9 @@ class Stack:
             return None if res[pol][i] is None else b(res[pol][i])
 
         def absorbed(pol):
-            return np.stack([b(x) for x in res[pol][4]]) if layer_absorption else None
+            if not layer_absorption:
+                return None
+            return np.stack([b(x) for x in res[pol][4]]) if self.layers else np.zeros((0,) + shape)
 
         return StackResult(
             wavelength_nm=w,
