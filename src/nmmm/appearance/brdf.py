@@ -742,7 +742,8 @@ class _Tables:
         _kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
                 self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
                 np.ascontiguousarray(self.tau_e, float), kb, self.Dms, np.asarray(self.Kms, float),
-                "specular" in comps, "flakes" in comps and self.has_flakes, do_base, do_ms)
+                "specular" in comps, "flakes" in comps and self.has_flakes, do_base, do_ms,
+                bool(self.tau_e_const))
 
     def evaluate(self, wi, wo, comps):
         P = wi.shape[0]
@@ -815,7 +816,7 @@ except ImportError:  # pragma: no cover
 
 
 def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kb, Dms, Kms,
-               do_spec, do_flakes, do_base, do_ms):
+               do_spec, do_flakes, do_base, do_ms, tau_e_const):
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
@@ -896,16 +897,27 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
                 xc = min(np.arccos(min(max(cdl, 0.0), 1.0)) * r2d / step, NT - 1.000001)
                 c0 = int(xc)
                 fc = xc - c0
+        # flakes that block no light (tau_e = const over wavelength): one exp per pair
+        x0 = tau_e[0] * S
+        e0 = np.exp(-x0)
+        ph0 = 1.0 - 0.5 * x0 if x0 < 1e-6 else (1.0 - e0) / x0
         for l in range(L):
             val = 0.0
             if spec_w > 0.0:
                 val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
             sub = 0.0
             if do_flakes or do_base:
-                x = tau_e[l] * S
-                e = np.exp(-x)
+                if tau_e_const:
+                    x = x0
+                    e = e0
+                else:
+                    x = tau_e[l] * S
+                    e = np.exp(-x)
                 if do_flakes and g > 0.0:
-                    ph = 1.0 - 0.5 * x if x < 1e-6 else (1.0 - e) / x
+                    if tau_e_const:
+                        ph = ph0
+                    else:
+                        ph = 1.0 - 0.5 * x if x < 1e-6 else (1.0 - e) / x
                     sub += g * ph * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
                 if do_base:
                     sub += e * kb[l]
