@@ -1,0 +1,43 @@
+"""The ``nmmm appearance`` commands and the demo hook."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from nmmm.appearance.cli import appearance
+
+
+def test_multiangle_command_json():
+    r = CliRunner().invoke(appearance, ["multiangle", "--paint", "solid", "--json"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.output)
+    assert [a["aspecular_deg"] for a in d["angles"]] == [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0]
+    assert abs(d["flop_index"]) < 1.0
+
+
+def test_table_and_sparkle_commands(tmp_path):
+    out = tmp_path / "t.csv"
+    r = CliRunner().invoke(appearance, ["table", "--paint", "solid", "--out", str(out), "--n-theta-h", "4",
+                                        "--n-theta-d", "4", "--n-phi-d", "2", "--step-nm", "100"])
+    assert r.exit_code == 0, r.output
+    assert out.exists()
+    img = np.full((64, 64), 0.2)
+    img[30:33, 30:33] = 2.0
+    np.save(tmp_path / "img.npy", img)
+    r = CliRunner().invoke(appearance, ["sparkle", str(tmp_path / "img.npy"), "--pixel-size-um", "10",
+                                        "--encoding", "linear"])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.output)["n_sparkles"] == 1
+
+
+@pytest.mark.slow
+def test_demo_hook(tmp_path):
+    from nmmm.appearance.examples import demo
+
+    r = demo(tmp_path)
+    assert set(r) == {"title", "figures", "tables", "text"}
+    assert all((tmp_path / p).exists() or __import__("os").path.exists(p) for p in r["figures"])
+    assert (tmp_path / "grey_metallic_brdf_table.nc").exists()
+    assert "flop index" in r["text"]
