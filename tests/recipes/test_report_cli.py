@@ -1,0 +1,123 @@
+"""The HTML report (headless chromium), `nmmm demo` guarding, `nmmm compare`, the CLI."""
+
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from nmmm.recipes import cli
+from nmmm.recipes.schema import example_path, set_key
+
+from .conftest import fast_raw
+
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def _open_in_chromium(path: Path):
+    sync_api = pytest.importorskip("playwright.sync_api")
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page()
+            errors = []
+            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(path.resolve().as_uri())
+            page.wait_for_load_state("load")
+            widths = page.evaluate("Array.from(document.images).map(i => i.complete ? i.naturalWidth : 0)")
+            text = page.inner_text("body")
+        finally:
+            browser.close()
+    return errors, widths, text
+
+
+@pytest.mark.browser
+@pytest.mark.skipif(not os.path.exists(CHROMIUM), reason="needs Debian's chromium at /usr/bin/chromium")
+def test_report_opens_in_chromium_and_shows_its_images(tmp_path):
+    from nmmm.recipes.run import run_recipe
+
+    res = run_recipe(fast_raw("grey_metallic", step_nm=40.0), tmp_path, progress=False)
+    html = Path(res.files["report"]).read_text()
+    assert "src=\"http" not in html and "<script src" not in html  # self-contained
+    errors, widths, text = _open_in_chromium(Path(res.files["report"]))
+    assert errors == []
+    assert len(widths) >= 3 and all(w > 0 for w in widths)
+    assert "Grey metallic plate" in text and "L* (1)" in text and "aspecular angle (°)" in text
+    assert "Recipe (TOML)" in text
+
+
+def test_demo_guards_each_section_and_exits_nonzero_on_failure(tmp_path, monkeypatch):
+    from nmmm.recipes import demo as demo_mod
+
+    monkeypatch.setattr(demo_mod, "RECIPE_SECTIONS", ("interference_pigment",))
+    monkeypatch.setattr(demo_mod, "HOOKS", (("A broken package", "json:loads"),  # TypeError on a Path
+                                            ("A package not written yet", "nmmm.no_such_package.examples:demo")))
+    r = CliRunner().invoke(cli.demo, ["-o", str(tmp_path), "--no-progress"])
+    assert r.exit_code == 1
+    assert "1 section(s) failed: A broken package" in r.output
+    assert "not available: A package not written yet" in r.output
+    html = (tmp_path / "report.html").read_text()
+    assert "class='error'" in html and "TypeError" in html
+    assert "Interference pigment" in html and "data:image/png;base64," in html
+
+
+def test_demo_quick_only_succeeds(tmp_path):
+    r = CliRunner().invoke(cli.demo, ["-o", str(tmp_path), "--quick", "--only", "interference", "--no-progress"])
+    assert r.exit_code == 0, r.output
+    assert re.search(r"report: .*report\.html", r.output)
+
+
+def test_compare_same_recipe_is_zero_and_matches_colour_science(tmp_path):
+    import colour
+
+    from nmmm.recipes.compare import compare_recipes
+
+    a = fast_raw("hematite_paint", step_nm=20.0)
+    b = set_key(a, "pigment.body_diagonal_nm", 600.0)  # grain-size substitution
+    out = compare_recipes(a, b, tmp_path, illuminants=["D65", "A"], progress=False)
+    rows = [r for r in out["rows"] if r["illuminant"] == "D65"]
+    ref = colour.delta_E([rows[0]["L_A"], rows[0]["a_A"], rows[0]["b_A"]],
+                         [rows[0]["L_B"], rows[0]["a_B"], rows[0]["b_B"]], method="CIE 2000")
+    assert rows[0]["dE00"] == pytest.approx(float(ref), rel=1e-9)
+    assert rows[0]["dE00"] > 0.1
+    assert {r["illuminant"] for r in out["rows"]} == {"D65", "A"}
+    assert Path(out["report"]).exists() and (tmp_path / "spectra_overlay.png").exists()
+    same = compare_recipes(a, a, tmp_path / "same", progress=False)
+    assert all(abs(r["dE00"]) < 1e-9 for r in same["rows"])
+
+
+def test_cli_run_and_sweep_and_errors(tmp_path):
+    p = tmp_path / "paint.toml"
+    p.write_text(example_path("interference_pigment").read_text().replace("step_nm = 5", "step_nm = 20"))
+    runner = CliRunner()
+    r = runner.invoke(cli.run, [str(p), "-o", str(tmp_path / "out"), "--no-progress"])
+    assert r.exit_code == 0, r.output
+    assert "L* =" in r.output and (tmp_path / "out" / "report.html").exists()
+    r = runner.invoke(cli.sweep, [str(p), "--vary", "thin_film.layers[1].thickness_nm=100,140", "--serial",
+                                  "-o", str(tmp_path / "sw"), "--no-progress"])
+    assert r.exit_code == 0, r.output
+    assert "2 points: 2 computed" in r.output
+    r = runner.invoke(cli.sweep, [str(p), "--vary", "thin_film.layers[1].thickness_nm=100,140", "--serial",
+                                  "-o", str(tmp_path / "sw"), "--no-progress"])
+    assert "0 computed, 2 already done" in r.output
+    bad = tmp_path / "bad.toml"
+    bad.write_text(p.read_text().replace("thickness_nm = 120", "thickness_nm = -120", 1))
+    r = runner.invoke(cli.run, [str(bad), "-o", str(tmp_path / "bad"), "--no-progress"])
+    assert r.exit_code != 0 and "thin_film.layers[1].thickness_nm: must be > 0" in r.output
+    r = runner.invoke(cli.run, ["no_such_recipe", "--no-progress"])
+    assert r.exit_code != 0 and "shipped" in r.output
+
+
+def test_top_level_cli_maps_the_commands():
+    from nmmm.cli import cli as top
+
+    r = CliRunner().invoke(top, ["--help"])
+    for name in ("run", "demo", "compare", "sweep"):
+        assert name in r.output
+    r = CliRunner().invoke(top, ["sweep", "--help"])
+    assert "--vary" in r.output and "--scheduler" in r.output
