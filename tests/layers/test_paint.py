@@ -126,9 +126,9 @@ def test_bad_film(kwargs):
 
 
 def test_bad_indices_and_solver():
-    with pytest.raises(InvalidInputError, match="k < 0"):
+    with pytest.raises(InvalidInputError, match="pigment has k < 0"):
         paint_reflectance(PaintFilm(2.0 - 0.1j, N_B, monodisperse(D), 0.05, 1e4), W)
-    with pytest.raises(InvalidInputError, match="k < 0"):
+    with pytest.raises(InvalidInputError, match="binder has k < 0"):
         paint_reflectance(PaintFilm(PIG, 1.5 - 1e-6j, monodisperse(D), 0.05, 1e4), W)
     with pytest.raises(InvalidInputError):
         paint_reflectance(PaintFilm(PIG, N_B, monodisperse(D), 0.05, 1e4), W, solver="monte-carlo")

@@ -60,6 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nmmm.errors import InvalidInputError
+from nmmm.layers.fresnel import medium_nk
 from nmmm.layers.mie import mie
 from nmmm.spectra import as_wavelength_nm, check_finite, check_fraction, check_positive
 
@@ -343,7 +344,7 @@ def pigment_optics(
     w = as_wavelength_nm(np.atleast_1d(wavelength_nm))
     if w.ndim != 1:
         raise InvalidInputError("wavelength_nm must be 1-D")
-    nk = n_particle.nk(w) if hasattr(n_particle, "nk") else np.broadcast_to(np.asarray(n_particle, dtype=complex), w.shape)
+    nk = np.broadcast_to(medium_nk(n_particle, w, "n_particle"), w.shape)
     nm = n_medium.nk(w) if hasattr(n_medium, "nk") else np.broadcast_to(np.asarray(n_medium), w.shape)
     d = distribution.diameter_nm
     wn = distribution.number_weights

@@ -8,6 +8,7 @@ Public functions
   (Snell), on the branch of the forward-going wave; complex angles in absorbing media.
 - :func:`brewster_angle` — ``arctan(n2/n1)`` for real indices.
 - :func:`critical_angle` — ``arcsin(n2/n1)`` for total internal reflection.
+- :func:`medium_nk`, :func:`check_angle_deg` — input checks shared by :mod:`nmmm.layers`.
 
 Conventions (the whole package)
 -------------------------------
@@ -59,10 +60,24 @@ __all__ = [
     "brewster_angle",
     "critical_angle",
     "check_angle_deg",
+    "medium_nk",
 ]
 
 #: tolerance deciding whether Im(n cos θ) is "zero" when picking the forward branch
 _BRANCH_TOL = 1e-12
+
+
+def medium_nk(value, wavelength_nm, name: str = "nk") -> np.ndarray:
+    """n + ik of a medium, validated (finite, ``k >= 0``).
+
+    ``value`` is a nmmm Material (anything with ``.nk(wavelength_nm)``, evaluated at
+    ``wavelength_nm``; the error then names the material) or complex values, returned as
+    given (no broadcasting against the wavelengths).
+    """
+    if hasattr(value, "nk") and callable(value.nk):
+        label = f"{name} ({getattr(value, 'name', type(value).__name__)})"
+        return check_nk(value.nk(wavelength_nm), label)
+    return check_nk(value, name)
 
 
 def check_angle_deg(angle_deg, name: str = "angle_deg") -> np.ndarray:

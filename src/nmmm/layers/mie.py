@@ -49,7 +49,8 @@ import numba
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.spectra import as_wavelength_nm, check_finite, check_nk, check_positive
+from nmmm.layers.fresnel import medium_nk
+from nmmm.spectra import as_wavelength_nm, check_finite, check_positive
 
 __all__ = ["MieResult", "mie", "mie_coated", "mie_multilayer"]
 
@@ -424,9 +425,7 @@ def _medium_index(n_medium, wavelength_nm):
 
 
 def _particle_index(n_particle, wavelength_nm, name):
-    if hasattr(n_particle, "nk"):
-        n_particle = n_particle.nk(wavelength_nm)
-    nk = check_nk(n_particle, name)
+    nk = medium_nk(n_particle, wavelength_nm, name)
     if np.any(nk.real <= 0):
         raise InvalidInputError(f"{name} must have n > 0, got min n = {nk.real.min()!r}")
     return nk

@@ -60,7 +60,8 @@ from nmmm.errors import InvalidInputError
 from nmmm.layers.adding_doubling import adding_doubling
 from nmmm.layers.distributions import SizeDistribution, pigment_optics
 from nmmm.layers.kubelka_munk import km_coefficients, km_reflectance, saunderson, saunderson_k1, saunderson_k2
-from nmmm.spectra import as_wavelength_nm, check_finite, check_fraction, check_nk
+from nmmm.layers.fresnel import medium_nk
+from nmmm.spectra import as_wavelength_nm, check_finite, check_fraction
 
 __all__ = [
     "PaintFilm",
@@ -148,9 +149,7 @@ class PaintReflectance:
 
 
 def _nk(x, w, name):
-    if hasattr(x, "nk"):
-        return x.nk(w)
-    return np.broadcast_to(check_nk(x, name), w.shape)
+    return np.broadcast_to(medium_nk(x, w, name), w.shape)
 
 
 def film_coefficients(film: PaintFilm, wavelength_nm) -> FilmCoefficients:
@@ -161,7 +160,7 @@ def film_coefficients(film: PaintFilm, wavelength_nm) -> FilmCoefficients:
     alpha_b = 4 * np.pi * nb.imag / w
     f = float(film.volume_fraction)
     opt = pigment_optics(
-        film.pigment,
+        _nk(film.pigment, w, "pigment"),
         n_host,
         film.distribution,
         w,

@@ -66,7 +66,7 @@ import numba
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.fresnel import UnpolarizedPower, check_angle_deg, n_cos_theta
+from nmmm.layers.fresnel import UnpolarizedPower, check_angle_deg, medium_nk, n_cos_theta
 from nmmm.spectra import as_wavelength_nm, check_finite, check_nk, check_positive
 
 __all__ = ["Layer", "Stack", "StackResult", "coherent_rt", "NUMBA_MIN_POINTS"]
@@ -112,9 +112,7 @@ def _medium_name(value) -> str:
 def _eval_nk(value, w_nm: np.ndarray, what: str) -> np.ndarray:
     """n + ik of a medium on the wavelength array ``w_nm`` (same shape)."""
     if hasattr(value, "nk"):
-        nk = np.asarray(value.nk(w_nm), dtype=complex)
-        check_nk(nk, f"{what} ({_medium_name(value)})")
-        return nk
+        return medium_nk(value, w_nm, what)
     nk = np.asarray(value, dtype=complex)
     if nk.ndim == 0:
         return np.broadcast_to(nk, w_nm.shape)
