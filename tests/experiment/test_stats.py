@@ -30,7 +30,7 @@ from nmmm.experiment.stats import (
 
 def test_dprime_2afc_textbook():
     # Macmillan & Creelman (2005) ch. 7: d' = sqrt(2) z(Pc); z(0.76) = 0.706 (normal table),
-    # so d' = 0.998; Hacker & Ratcliff (1979) tabulate d' = 0.99 for Pc = 0.76 at M = 2.
+    # so d' = 0.998.
     assert dprime_2afc(0.76) == pytest.approx(math.sqrt(2) * 0.7063, abs=2e-4)
     assert dprime_2afc(0.76) == pytest.approx(0.998, abs=2e-3)
     assert dprime_2afc(0.5) == 0.0
@@ -53,8 +53,9 @@ def test_dprime_counts_corrections():
 
 
 def test_critical_count_binomial_table():
-    # One-sided binomial tables (e.g. Siegel & Castellan 1988, Table D): at alpha = 0.05 and
-    # p = 0.5 the criterion is 15 of 20, 9 of 10, 18 of 25, 20 of 30, 26 of 40.
+    # One-sided exact binomial criteria at alpha = 0.05, p = 0.5 (cumulative binomial tables,
+    # e.g. Siegel & Castellan 1988, Nonparametric Statistics, table of the binomial test):
+    # 15 of 20, 9 of 10, 18 of 25, 20 of 30, 26 of 40.
     assert critical_count(20) == 15
     assert critical_count(10) == 9
     assert critical_count(25) == 18
@@ -66,8 +67,8 @@ def test_critical_count_binomial_table():
     assert critical_count(3) == 4  # nothing is significant with 3 trials
 
 
-# Newcombe (1998), Statistics in Medicine 17:857, Table II, methods 3 (Wilson score) and 5
-# (Clopper-Pearson exact), 95 % intervals.
+# Newcombe (1998), Statistics in Medicine 17:857, worked examples: Wilson score (method 3) and
+# Clopper-Pearson exact (method 5) 95 % intervals.
 NEWCOMBE = [
     (81, 263, (0.2553, 0.3662), (0.2527, 0.3676)),
     (15, 148, (0.0624, 0.1605), (0.0578, 0.1617)),
@@ -139,7 +140,8 @@ def test_cluster_robust_unequal_n_ratio_estimator():
     n = np.array([10, 20, 10, 25, 18])
     est = pooled_cluster_robust(k, n, floor_binomial=False)
     p = k.sum() / n.sum()
-    # Cochran (1977), Sampling Techniques, eq. 6.13: v(r) = sum (y_i - r x_i)^2 / (G (G-1) xbar^2)
+    # Cochran (1977), Sampling Techniques, ch. 6, ratio estimator without finite-population
+    # correction: v(r) = sum (y_i - r x_i)^2 / (G (G-1) xbar^2)
     G = len(k)
     v = np.sum((k - p * n) ** 2) / (G * (G - 1) * n.mean() ** 2)
     assert est.se == pytest.approx(math.sqrt(v))

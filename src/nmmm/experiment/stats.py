@@ -65,6 +65,7 @@ References
 - Schuirmann, D. J. (1987). A comparison of the two one-sided tests procedure and the power
   approach for assessing the equivalence of average bioavailability. *J. Pharmacokinet.
   Biopharm.* 15, 657-680. doi:10.1007/BF01068419
+- Cochran, W. G. (1977). *Sampling Techniques*, 3rd ed., Wiley, ch. 6 (ratio estimators).
 - Cameron, A. C., Miller, D. L. (2015). A practitioner's guide to cluster-robust inference.
   *J. Human Resources* 50, 317-372. doi:10.3368/jhr.50.2.317
 - Williams, D. A. (1975). The analysis of binary responses from toxicological experiments
@@ -142,8 +143,8 @@ def binomial_test(k: int, n: int, p0: float = 0.5, alternative: str = "greater")
 def dprime_2afc(pc):
     """Sensitivity d' of an unbiased 2AFC observer: ``d' = sqrt(2) * z(Pc)``.
 
-    ``z`` is the inverse of the standard normal CDF (Macmillan & Creelman 2005, eq. 7.2).
-    ``Pc`` = 0 or 1 gives -inf / +inf; use :func:`dprime_2afc_counts` for counts.
+    ``z`` is the inverse of the standard normal CDF.
+    Macmillan & Creelman (2005), ch. 7. ``Pc`` = 0 or 1 gives -inf / +inf; use :func:`dprime_2afc_counts` for counts.
 
     >>> round(float(dprime_2afc(0.76)), 3)    # sqrt(2) * 0.706
     0.999
@@ -190,7 +191,7 @@ def proportion_ci_wilson(k, n, confidence: float = 0.95):
 
     Returns ``(lower, upper)`` arrays (broadcast over ``k`` and ``n``).
 
-    >>> lo, hi = proportion_ci_wilson(81, 263)    # Newcombe (1998), Table II: 0.2553-0.3662
+    >>> lo, hi = proportion_ci_wilson(81, 263)    # Newcombe (1998) example: 0.2553-0.3662
     >>> round(float(lo), 4), round(float(hi), 4)
     (0.2553, 0.3662)
     """
@@ -209,7 +210,7 @@ def proportion_ci_wilson(k, n, confidence: float = 0.95):
 def proportion_ci_clopper_pearson(k, n, confidence: float = 0.95):
     """Clopper-Pearson 'exact' interval from beta quantiles (Clopper & Pearson 1934).
 
-    >>> lo, hi = proportion_ci_clopper_pearson(81, 263)  # Newcombe (1998), Table II: 0.2527-0.3676
+    >>> lo, hi = proportion_ci_clopper_pearson(81, 263)  # Newcombe (1998) example: 0.2527-0.3676
     >>> round(float(lo), 4), round(float(hi), 4)
     (0.2527, 0.3676)
     """

@@ -350,7 +350,7 @@ def read_responses(db_path) -> list[dict]:
     if not path.is_file():
         raise DataFileError(f"response database {str(path)!r} not found")
     try:
-        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=30.0)
+        con = sqlite3.connect(path.resolve().as_uri() + "?mode=ro", uri=True, timeout=30.0)
         con.row_factory = sqlite3.Row
         try:
             rows = con.execute(
