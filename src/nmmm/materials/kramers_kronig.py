@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from nmmm.errors import InvalidInputError
@@ -46,35 +47,57 @@ def _sorted_grid(energy_ev, values):
     return E, f
 
 
-def _pv_integrals(E, f, E_eval, chunk=512):
+@numba.njit(cache=True)
+def _pv_kernel(E, alpha, beta, x, I1, I0):
+    """Segment sums of :func:`_pv_integrals` for coefficient rows ``alpha[p], beta[p]`` at points ``x``.
+
+    ln|E_n − x| and ln(E_n + x) are taken once per node: the logarithms of the segment ends
+    telescope (ln|b − x| of one segment is ln|a − x| of the next), half the work of taking
+    them per segment, with no (points × segments) temporaries.
+    """
+    P, S = alpha.shape
+    lm = np.empty(S + 1)
+    lp = np.empty(S + 1)
+    for i in range(x.size):
+        xi = x[i]
+        for n in range(S + 1):
+            d = abs(E[n] - xi)
+            lm[n] = np.log(d) if d > 0 else 0.0  # x at a node: the singular parts cancel
+            lp[n] = np.log(E[n] + xi)
+        for p in range(P):
+            s1 = 0.0
+            s0 = 0.0
+            for j in range(S):
+                log_minus = lm[j + 1] - lm[j]  # ln|b−x| − ln|a−x|
+                log_plus = lp[j + 1] - lp[j]  # ln((b+x)/(a+x))
+                c_m = (alpha[p, j] + beta[p, j] * xi) / 2
+                c_p = (alpha[p, j] - beta[p, j] * xi) / 2
+                s1 += beta[p, j] * (E[j + 1] - E[j]) + c_m * log_minus + c_p * log_plus
+                s0 += c_m * log_minus - c_p * log_plus
+            I1[p, i] = s1
+            I0[p, i] = s0 / xi
+
+
+def _pv_integrals(E, f, E_eval):
     """Exact principal values for piecewise-linear f on nodes E:
 
     I1(x) = P∫ E' f(E') / (E'² − x²) dE',   I0(x) = P∫ f(E') / (E'² − x²) dE'.
+
+    On a segment [a, b] with f = α + βE', the partial fractions give
+    I1 = β(b − a) + c₋ ln|(b − x)/(a − x)| + c₊ ln((b + x)/(a + x)), c± = (α ∓ βx)/2,
+    and I0 = (c₋ ln|…| − c₊ ln(…))/x. Returns arrays of shape ``f.shape[:-1] + E_eval.shape``.
     """
     a, b = E[:-1], E[1:]
     beta = np.diff(f, axis=-1) / (b - a)
     alpha = f[..., :-1] - beta * a
     x_all = np.asarray(E_eval, dtype=float)
-    I1 = np.empty(f.shape[:-1] + x_all.shape)
+    lead = f.shape[:-1]
+    S = a.size
+    I1 = np.empty((int(np.prod(lead)), x_all.size))
     I0 = np.empty_like(I1)
-    flat = x_all.ravel()
-    for s in range(0, flat.size, chunk):
-        x = flat[s:s + chunk, None]  # (m, 1) against segments (1, S)
-        dm_b, dm_a = np.abs(b - x), np.abs(a - x)
-        with np.errstate(divide="ignore"):
-            lm_b = np.where(dm_b > 0, np.log(np.where(dm_b > 0, dm_b, 1.0)), 0.0)
-            lm_a = np.where(dm_a > 0, np.log(np.where(dm_a > 0, dm_a, 1.0)), 0.0)
-        log_minus = lm_b - lm_a  # ln|b−x| − ln|a−x|, singular parts (x at a node) dropped: they cancel
-        log_plus = np.log((b + x) / (a + x))
-        al, be = alpha[..., None, :], beta[..., None, :]
-        c_m = (al + be * x) / 2
-        c_p = (al - be * x) / 2
-        i1 = (be * (b - a) + c_m * log_minus + c_p * log_plus).sum(-1)
-        i0 = ((c_m * log_minus - c_p * log_plus) / x).sum(-1)
-        idx = np.unravel_index(np.arange(s, min(s + chunk, flat.size)), x_all.shape)
-        I1[(..., *idx)] = i1
-        I0[(..., *idx)] = i0
-    return I1, I0
+    _pv_kernel(np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(alpha.reshape(-1, S), dtype=float),
+               np.ascontiguousarray(beta.reshape(-1, S), dtype=float), np.ascontiguousarray(x_all.ravel()), I1, I0)
+    return I1.reshape(lead + x_all.shape), I0.reshape(lead + x_all.shape)
 
 
 def _energy(wavelength_nm=None, energy_ev=None):
