@@ -74,9 +74,13 @@ def test_km_coefficients_and_hiding():
     np.testing.assert_allclose(S, [0.6, 0.6])
     Ks, Ss = km_coefficients(0.1, 2.0, 0.6, method="star")
     assert Ss == pytest.approx(0.6 - 0.025)
-    X = hiding_thickness(0.05, 1.0, 0.98, 0.8)
-    cr = km_reflectance(0.05, 1.0, X, 0.0) / km_reflectance(0.05, 1.0, X, 0.8)
-    assert float(cr) == pytest.approx(0.98, rel=1e-6)
+    X = float(hiding_thickness(0.05, 1.0, 0.98, 0.8))
+    # contrast ratio from Kubelka's (1948) closed form, R = (1 - Rg(a - b coth bSX))/(a - Rg + b coth bSX)
+    a = 1 + 0.05 / 1.0
+    b = np.sqrt(a * a - 1)
+    coth = 1 / np.tanh(b * X)
+    cr = (1 / (a + b * coth)) / ((1 - 0.8 * (a - b * coth)) / (a - 0.8 + b * coth))
+    assert cr == pytest.approx(0.98, rel=1e-6)
     assert np.isinf(hiding_thickness(0.05, 0.0))
 
 
