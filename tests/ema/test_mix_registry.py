@@ -35,6 +35,9 @@ def test_dispatcher_names_and_aliases():
             assert np.isclose(effective_permittivity(ei, em, 0.0, method=key), em)
     with pytest.raises(InvalidInputError, match="unknown effective-medium method"):
         effective_permittivity(ei, em, f, method="magic")
+    # an option the method does not take is named, with the ones it does take
+    with pytest.raises(InvalidInputError, match=r"'bruggeman' takes no argument\(s\) \['depolarization'\].*shapes"):
+        effective_permittivity(ei, em, f, method="bruggeman", depolarization=[0.2, 0.2, 0.6])
 
 
 def test_mix_is_a_material_and_matches_the_formula(gold_silica):

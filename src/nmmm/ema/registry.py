@@ -16,6 +16,8 @@ References: see each method's module (:mod:`~nmmm.ema.maxwell_garnett`,
 
 from __future__ import annotations
 
+import inspect
+
 from nmmm.ema.bounds import wiener_bounds
 from nmmm.ema.bruggeman import bruggeman
 from nmmm.ema.looyenga import looyenga
@@ -104,7 +106,15 @@ def effective_permittivity(eps_inclusion, eps_host, fraction, method: str = "max
     >>> round(float(effective_permittivity(1.0, 4.0, 0.5, method="Bruggeman").real), 6)
     2.171165
     """
-    return EFFECTIVE_PERMITTIVITY_METHODS[canonical_method(method)](eps_inclusion, eps_host, fraction, **kwargs)
+    key = canonical_method(method)
+    function = EFFECTIVE_PERMITTIVITY_METHODS[key]
+    accepted = [name for name, p in list(inspect.signature(function).parameters.items())[3:]
+                if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    unknown = sorted(set(kwargs) - set(accepted))
+    if unknown:
+        raise InvalidInputError(
+            f"method {key!r} takes no argument(s) {unknown}; it takes {accepted or 'no options'}")
+    return function(eps_inclusion, eps_host, fraction, **kwargs)
 
 
 __all__ = ["EFFECTIVE_PERMITTIVITY_METHODS", "canonical_method", "effective_permittivity"]
