@@ -41,7 +41,8 @@ def test_browser_session_with_server_kills_and_resume(tmp_path, server_factory):
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         try:
-            page = browser.new_page(viewport={"width": 1280, "height": 800})
+            # a HiDPI display: 2 device pixels per CSS pixel
+            page = browser.new_page(viewport={"width": 1280, "height": 800}, device_scale_factor=2)
             page.set_default_timeout(30_000)
             expect.set_options(timeout=30_000)   # the CI machine may be busy
             page.goto(srv.url + "/")
@@ -66,6 +67,10 @@ def test_browser_session_with_server_kills_and_resume(tmp_path, server_factory):
                 left, right = page.locator("#choice-left"), page.locator("#choice-right")
                 bl, br = left.bounding_box(), right.bounding_box()
                 assert (round(bl["width"]), round(bl["height"])) == (round(br["width"]), round(br["height"]))
+                # one image pixel per device pixel: 48-px-wide stimuli are 24 CSS px wide at DPR 2
+                widths = page.eval_on_selector_all(
+                    "#stage img", "els => els.map(e => [e.naturalWidth, e.getBoundingClientRect().width])")
+                assert widths == [[48, 24], [48, 24]], widths
                 srcs = page.eval_on_selector_all("#stage img", "els => els.map(e => e.getAttribute('src'))")
                 assert len(srcs) == 2 and all("/left" in s or "/right" in s for s in srcs)
                 assert not any(w in s for s in srcs for w in ("photo", "render", ".jpg", "p0", "r0"))

@@ -120,6 +120,15 @@ function loadImage(url) {
   });
 }
 
+// one image pixel per device pixel (a calibrated display shows the rendering's detail as
+// computed); both images share one pixel size, so CSS limits scale them alike if too large
+function deviceExact(img) {
+  const dpr = window.devicePixelRatio || 1;
+  img.style.width = img.naturalWidth / dpr + "px";
+  img.style.height = "auto";
+  return img;
+}
+
 function buildStage(trial, imgs) {
   const stage = $("stage");
   stage.replaceChildren();
@@ -132,9 +141,9 @@ function buildStage(trial, imgs) {
     frame.tabIndex = 0;
     if (state.config.stereo) {
       const eyes = state.config.stereo_arrangement === "cross" ? ["right_eye", "left_eye"] : ["left_eye", "right_eye"];
-      for (const eye of eyes) frame.appendChild(imgs[slot][eye]);
+      for (const eye of eyes) frame.appendChild(deviceExact(imgs[slot][eye]));
     } else {
-      frame.appendChild(imgs[slot]);
+      frame.appendChild(deviceExact(imgs[slot]));
     }
     frame.addEventListener("click", () => respond(slot));
     stage.appendChild(frame);
