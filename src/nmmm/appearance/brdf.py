@@ -147,7 +147,7 @@ __all__ = [
 COMPONENTS = ("specular", "flakes", "base", "multiple")
 
 _NT = 181  # angle nodes of the 1-D tables (0.5 deg)
-_NA = 91  # incidence nodes of the albedo tables (1 deg)
+_NA = 46  # incidence nodes of the albedo tables (2 deg)
 _CHUNK = 16384
 
 
@@ -586,7 +586,7 @@ class _Tables:
             self.Kms = np.where(1 - E0_bar > 1e-9, self.Fms / (np.pi * (1 - E0_bar)), 0.0)
         self.E0_bar = E0_bar
 
-    def _ms_factor(self, n_mu: int = 48, n_phi: int = 64, max_bounces: int = 400):
+    def _ms_factor(self, n_mu: int = 40, n_phi: int = 32, max_bounces: int = 400):
         """F_ms(λ): multiply scattered light that escapes, relative to the lossless paint.
 
         An azimuthally averaged interreflection model inside the coat: internal polar
