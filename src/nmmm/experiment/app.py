@@ -19,6 +19,11 @@ Experimenter routes need the admin token (``Authorization: Bearer <token>`` or
 ``?token=<token>``): ``GET /admin`` (participants, progress, resume links),
 ``GET /admin/export.csv``, ``GET /admin/participants.json``.
 
+What the participant sees: consent text and calibration note, then for each trial a neutral
+blank interval (``blank_ms``) and both stimuli at once, in identical neutral frames, at one
+image pixel per device pixel; the response time runs from the first frame showing them to the
+click or key press (ArrowLeft/ArrowRight, or ArrowUp/ArrowDown in stereo mode).
+
 What a participant can learn: their own progress, nothing else. Image URLs name the trial
 and the screen slot only; the JSON never says which slot holds the photograph, nor gives pair
 ids, labels or file names, and the acknowledgement of a response does not say whether it was
