@@ -91,6 +91,8 @@ def test_unknown_key_lists_close_matches():
         get("main/Au/Jonson")
     with pytest.raises(KeyError):
         get("nonsense")
+    with pytest.raises(nmmm.InvalidInputError, match="must be a string"):
+        get(5)
 
 
 def test_out_of_range_is_an_error_naming_material_and_range():

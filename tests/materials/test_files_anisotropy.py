@@ -76,3 +76,14 @@ def test_uniaxial_mean_of_hematite():
 def test_diagonal_tensor_mean_is_trace_over_three():
     t = DiagonalTensorMaterial(Constant(eps=2.0), Constant(eps=3.0), Constant(eps=-10 + 1j))
     assert t.mean().eps(500.0) == pytest.approx((2 + 3 - 10 + 1j) / 3)
+
+
+def test_uniaxial_mean_accepts_keys_and_constants_and_rejects_the_rest():
+    o, e = get("main/Fe2O3/Querry-o"), get("main/Fe2O3/Querry-e")
+    by_key = uniaxial_mean("main/Fe2O3/Querry-o", "main/Fe2O3/Querry-e")
+    np.testing.assert_allclose(by_key.eps(550.0), (2 * o.eps(550.0) + e.eps(550.0)) / 3)
+    assert uniaxial_mean(2.0, 2.2 + 0.1j).eps(500.0) == pytest.approx((2 * 4.0 + (2.2 + 0.1j) ** 2) / 3)
+    with pytest.raises(nmmm.InvalidInputError, match="extraordinary"):
+        uniaxial_mean(o, None)
+    with pytest.raises(nmmm.InvalidInputError, match="k < 0"):
+        uniaxial_mean(1.5 - 0.1j, e)
