@@ -205,6 +205,13 @@ def test_direction_below_surface_raises():
         b(W, _dir(30.0), np.array([0.0, 0.6, -0.8]))
 
 
+def test_below_surface_zero_option_for_renderers():
+    b = opaque_paint(0.5)
+    wo = np.stack([_dir(20.0), np.array([0.0, 0.6, -0.8])])
+    f = b(W, _dir(30.0), wo, below_surface="zero")
+    assert np.all(f[1] == 0) and np.allclose(f[0], b(W, _dir(30.0), _dir(20.0)))
+
+
 def test_non_unit_direction_raises():
     with pytest.raises(InvalidInputError, match="unit"):
         opaque_paint(0.5)(W, np.array([0.0, 0.0, 2.0]), _dir(10.0))

@@ -342,7 +342,7 @@ class PaintBRDF:
 
     # -- evaluation --------------------------------------------------------------------
     def evaluate(self, wavelength_nm, wi, wo, components=COMPONENTS, dtype=np.float64,
-                 method: str = "numba") -> np.ndarray:
+                 method: str = "numba", below_surface: str = "raise") -> np.ndarray:
         """f(λ, ωi, ωo) in 1/sr.
 
         ``wi``, ``wo``: unit vectors ``(..., 3)`` (broadcast together), z >= 0; a
@@ -352,11 +352,25 @@ class PaintBRDF:
         coat is not included (see :meth:`specular_reflectance`). ``method``: "numba" (a
         fused parallel kernel, default) or "numpy" (chunked array code, same equations).
         ``dtype=np.float32`` halves the memory of large evaluations.
+        ``below_surface="zero"`` returns 0 for pairs with a direction below the surface
+        instead of raising (for renderers whose samples may leave the hemisphere).
         """
         if method not in ("numba", "numpy"):
             raise InvalidInputError(f"method must be 'numba' or 'numpy', got {method!r}")
+        if below_surface not in ("raise", "zero"):
+            raise InvalidInputError(f"below_surface must be 'raise' or 'zero', got {below_surface!r}")
         tab = self.prepare(wavelength_nm)
         comps = _check_components(components)
+        below = None
+        if below_surface == "zero":
+            wi = np.array(check_finite(wi, "wi"), dtype=float)
+            wo = np.array(check_finite(wo, "wo"), dtype=float)
+            shape = np.broadcast_shapes(wi.shape, wo.shape)
+            wi, wo = np.broadcast_to(wi, shape).copy(), np.broadcast_to(wo, shape).copy()
+            below = (wi[..., 2] < 0) | (wo[..., 2] < 0)
+            wi[below] = (0.0, 0.0, 1.0)
+            wo[below] = (0.0, 0.0, 1.0)
+            below = below.reshape(-1)
         wi = check_directions(wi, "wi")
         wo = check_directions(wo, "wo")
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
@@ -368,6 +382,8 @@ class PaintBRDF:
         else:
             for s in range(0, wi.shape[0], _CHUNK):
                 out[s:s + _CHUNK] = tab.evaluate(wi[s:s + _CHUNK], wo[s:s + _CHUNK], comps)
+        if below is not None and below.any():
+            out[below] = 0.0
         return out.reshape(shape + (tab.L,))
 
     __call__ = evaluate
