@@ -59,6 +59,21 @@ With these, the white-furnace test holds exactly for lossless layers, the direct
 albedo never exceeds 1, and without flakes and pigment the BRDF is the Fresnel
 reflection of a clear dielectric.
 
+For renderers
+-------------
+``f = paint(wavelength_nm, wi, wo)``: ``wi``/``wo`` unit vectors ``(..., 3)``, z = surface
+normal, both pointing away from the surface; result ``(..., L)`` in 1/sr (no cos factor);
+~10^7–10^8 (pair × wavelength) evaluations per second on 2 cores (Numba kernel, see
+``benchmarks/bench_brdf.py``); ``dtype=np.float32`` to halve memory;
+``below_surface="zero"`` to get 0 rather than an error for directions under the horizon.
+Add the smooth coat's mirror Dirac ``paint.specular_reflectance(wavelength_nm, wi)``
+(weight in the direction ``(-wi_x, -wi_y, wi_z)``). ``components=("flakes",)`` etc.
+select terms — e.g. render the discrete flakes of a
+:class:`~nmmm.appearance.flakes.FlakeList` (:func:`flake_list_reflection`: per-flake
+mirror direction and spectral power) on top of ``components=("specular", "base",
+"multiple")`` to get sparkle without double counting the smooth flake lobe.
+``paint.albedo(wavelength_nm, wi)`` is the directional–hemispherical reflectance.
+
 Public objects
 --------------
 - :class:`ClearCoat`, :class:`PaintBRDF`
