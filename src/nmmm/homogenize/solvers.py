@@ -151,10 +151,17 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
     if nb <= 1e-14 * scale:  # homogeneous medium: E = E0
         return SolveOutcome(x if keep_x else None, problem.flux(x, tab, e0), 0, [0.0], True, "cocg")
     if x0 is not None:
-        x[...] = x0
-        Ax = problem.apply(x, tab)
-        r -= Ax
-        del Ax
+        # seed with γ x0, γ minimising ‖b − γ A x0‖ (never a worse start than x = 0)
+        Ax = problem.apply(x0, tab)
+        axv = Ax.reshape(-1)
+        den = float(np.vdot(axv, axv).real)
+        if den > 0:
+            gamma = np.vdot(axv, r.reshape(-1)) / den
+            x[...] = x0
+            x *= gamma
+            Ax *= gamma
+            r -= Ax
+        del Ax, axv
     p = problem.field()
     q = problem.q
     rv = r.reshape(-1)
