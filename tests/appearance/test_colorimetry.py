@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import nmmm
-from nmmm.appearance import delta_e2000, spectra_to_lab, spectra_to_srgb, spectra_to_xyz
+from nmmm.appearance import delta_e2000, spectra_to_lab, spectra_to_srgb, spectra_to_xyz, xyz_to_srgb
 
 
 def test_perfect_white_reflector():
@@ -67,3 +67,11 @@ def test_bad_inputs():
         spectra_to_lab(w, np.ones_like(w), illuminant="D66")
     with pytest.raises(nmmm.OutOfRangeError):
         spectra_to_lab(np.arange(380, 831, 5.0), np.ones(91))  # D65 in colour-science stops at 780 nm
+    with pytest.raises(nmmm.InvalidInputError, match="last axis of 3"):
+        delta_e2000([50.0, 2.0], [50.0, 2.0, 3.0])
+    with pytest.raises(nmmm.InvalidInputError, match="NaN"):
+        delta_e2000([np.nan, 2.0, 3.0], [50.0, 2.0, 3.0])
+    with pytest.raises(nmmm.InvalidInputError, match="NaN"):
+        xyz_to_srgb([np.nan, 20.0, 30.0])
+    with pytest.raises(nmmm.InvalidInputError, match="Y > 0"):
+        xyz_to_srgb([10.0, 20.0, 30.0], white_xyz=[0.0, 0.0, 0.0])

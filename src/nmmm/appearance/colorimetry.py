@@ -158,7 +158,16 @@ def delta_e2000(lab1, lab2) -> np.ndarray:
     """CIEDE2000 colour difference (Sharma, Wu & Dalal 2005), broadcasting."""
     import colour
 
-    return colour.delta_E(np.asarray(lab1, float), np.asarray(lab2, float), method="CIE 2000")
+    lab1, lab2 = _check_triplets(lab1, "lab1"), _check_triplets(lab2, "lab2")
+    return colour.delta_E(lab1, lab2, method="CIE 2000")
+
+
+def _check_triplets(x, name: str) -> np.ndarray:
+    """Finite colour coordinates with a last axis of 3 (L*, a*, b* or X, Y, Z)."""
+    a = check_finite(x, name).astype(float, copy=False)
+    if a.ndim == 0 or a.shape[-1] != 3:
+        raise InvalidInputError(f"{name} must have a last axis of 3 colour coordinates, got shape {a.shape}")
+    return a
 
 
 def xyz_to_srgb(xyz, white_xyz=None, clip: bool = True, exposure: float = 1.0) -> np.ndarray:
@@ -169,11 +178,13 @@ def xyz_to_srgb(xyz, white_xyz=None, clip: bool = True, exposure: float = 1.0) -
     """
     import colour
 
-    xyz = np.asarray(xyz, dtype=float) / 100.0 * exposure
+    xyz = _check_triplets(xyz, "xyz") / 100.0 * exposure
     if white_xyz is None:
         xy_w = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
     else:
-        white = np.asarray(white_xyz, dtype=float)
+        white = _check_triplets(white_xyz, "white_xyz")
+        if white.ndim != 1 or not white[1] > 0:
+            raise InvalidInputError(f"white_xyz must be one XYZ triplet with Y > 0, got {white.tolist()}")
         xy_w = colour.XYZ_to_xy(white / white[1])
     rgb = colour.XYZ_to_sRGB(xyz, illuminant=xy_w, chromatic_adaptation_transform="CAT02")
     return np.clip(rgb, 0.0, 1.0) if clip else rgb
