@@ -102,8 +102,12 @@ def test_close_to_jamming_raises_convergence_error():
 
 
 def test_bad_inputs():
-    with pytest.raises(InvalidInputError):
+    with pytest.raises(InvalidInputError, match="radius_nm contains NaN"):
         M.boolean_spheres((32, 32, 32), 1.0, float("nan"), fraction=0.1)
+    with pytest.raises(InvalidInputError, match="radius_nm must be > 0"):
+        M.hardcore_spheres((32, 32, 32), 1.0, -3.0, 0.1)
+    with pytest.raises(InvalidInputError, match="diagonal_nm must be > 0"):
+        M.hardcore_pseudocubes((32, 32, 32), 10.0, 0.0, 0.05)
     with pytest.raises(InvalidInputError):
         M.boolean_spheres((32, 32, 32), 1.0, 3.0, fraction=1.2)
     with pytest.raises(InvalidInputError):

@@ -270,7 +270,8 @@ def boolean_spheres(shape, voxel_nm, radius_nm, fraction=None, intensity=None, s
     True
     """
     box = cell_box_nm(shape, voxel_nm)
-    ps = boolean_particles(box, "sphere", radius_nm, fraction, intensity, seed=seed, periodic=periodic, phase=phase)
+    radius = as_size_distribution(radius_nm, "radius_nm")
+    ps = boolean_particles(box, "sphere", radius, fraction, intensity, seed=seed, periodic=periodic, phase=phase)
     return ps.rasterize(shape=shape)
 
 
@@ -278,7 +279,8 @@ def boolean_cubes(shape, voxel_nm, edge_nm, fraction=None, intensity=None, expon
                   seed=None, periodic=True, phase="particles") -> Microstructure:
     """Voxelised Boolean model of cubes (squares in 2-D) of edge ``edge_nm``, random orientations."""
     box = cell_box_nm(shape, voxel_nm)
-    ps = boolean_particles(box, "cube", edge_nm, fraction, intensity, orientation=orientation, exponent=exponent,
+    edge = as_size_distribution(edge_nm, "edge_nm")
+    ps = boolean_particles(box, "cube", edge, fraction, intensity, orientation=orientation, exponent=exponent,
                            seed=seed, periodic=periodic, phase=phase)
     return ps.rasterize(shape=shape)
 
@@ -287,6 +289,7 @@ def boolean_discs(shape, voxel_nm, diameter_nm, fraction=None, intensity=None, t
                   orientation="random", seed=None, periodic=True, phase="particles") -> Microstructure:
     """Voxelised Boolean model of discs: circles on a 2-D grid, platelets (cylinders) in 3-D."""
     box = cell_box_nm(shape, voxel_nm)
-    ps = boolean_particles(box, "disc", diameter_nm, fraction, intensity, thickness_nm=thickness_nm,
+    diameter = as_size_distribution(diameter_nm, "diameter_nm")
+    ps = boolean_particles(box, "disc", diameter, fraction, intensity, thickness_nm=thickness_nm,
                            orientation=orientation, seed=seed, periodic=periodic, phase=phase)
     return ps.rasterize(shape=shape)

@@ -385,7 +385,8 @@ def hardcore_spheres(shape, voxel_nm, radius_nm, fraction, exclusion_nm=0.0, see
     True
     """
     box = cell_box_nm(shape, voxel_nm)
-    ps = hardcore_particles(box, "sphere", radius_nm, fraction, exclusion_nm, seed=seed, periodic=periodic,
+    radius = as_size_distribution(radius_nm, "radius_nm")
+    ps = hardcore_particles(box, "sphere", radius, fraction, exclusion_nm, seed=seed, periodic=periodic,
                             max_attempts=max_attempts, progress=progress, phase=phase)
     return ps.rasterize(shape=shape)
 
@@ -395,6 +396,7 @@ def hardcore_pseudocubes(shape, voxel_nm, diagonal_nm=250.0, fraction=0.05, expo
                          phase="hematite") -> Microstructure:
     """Voxelised hard-core pseudo-cubes with random orientations (hematite: 250 nm diagonal, 5-10 %)."""
     box = cell_box_nm(shape, voxel_nm)
-    ps = hardcore_particles(box, "pseudocube", diagonal_nm, fraction, exclusion_nm, exponent=exponent, seed=seed,
+    diagonal = as_size_distribution(diagonal_nm, "diagonal_nm")
+    ps = hardcore_particles(box, "pseudocube", diagonal, fraction, exclusion_nm, exponent=exponent, seed=seed,
                             periodic=periodic, max_attempts=max_attempts, progress=progress, phase=phase)
     return ps.rasterize(shape=shape)
