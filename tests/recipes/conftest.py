@@ -14,6 +14,7 @@ def fast_raw(name: str, step_nm: float = 20.0) -> dict:
     raw.setdefault("spectral", {})["step_nm"] = step_nm
     if "image" in raw:
         raw["image"]["pixels"] = [30, 20]
+        raw["image"]["renderer"] = "simple"  # the discrete-flake renderer is exercised by a slow test
     if "pigment" in raw:
         raw["pigment"]["size_nodes"] = 8
     return raw

@@ -128,3 +128,15 @@ def test_fft_level_runs_and_lies_between_wiener_bounds(tmp_path):
     hi = 0.8 * 1.5**2 + 0.2 * 2.5**2
     # the cell's actual fraction differs a little from 0.2; allow for it in the bounds
     assert np.all((eps.real > lo - 0.05) & (eps.real < hi + 0.05))
+
+
+@pytest.mark.slow
+def test_grey_metallic_stereo_with_discrete_flakes(tmp_path):
+    pytest.importorskip("nmmm.appearance.render")
+    raw = fast_raw("grey_metallic", step_nm=40.0)
+    raw["image"].update(renderer="auto", pixels=[120, 80])
+    res = run_recipe(raw, tmp_path, progress=False)
+    left, right = res.images["left eye"], res.images["right eye"]
+    assert left.shape == right.shape == (80, 120, 3)
+    assert np.abs(left - right).max() > 0.05  # glints differ between the eyes
+    assert any("discrete flakes" in n for n in res.notes)

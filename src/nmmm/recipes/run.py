@@ -260,7 +260,59 @@ def _effect(recipe, mats, w, res):
                      f"Gaussian tilt σ = {recipe.effect.tilt_deg:g}°, base reflectance {recipe.effect.body_reflectance:g}); "
                      f"reflectance factors π f at {v.illumination_deg:g}° illumination, in the plane of incidence.")
     if recipe.image is not None and recipe.outputs.images:
-        res.images.update(_stereo(recipe, brdf, w))
+        images = None
+        if recipe.image.renderer == "auto":
+            try:
+                images = _stereo_rendered(recipe, brdf, w)
+                res.notes.append(
+                    "Images: nmmm.appearance.render — the plate tiled with a "
+                    f"{recipe.image.cell_um:g} µm unit cell of discrete flakes (mean diameter "
+                    f"{recipe.image.flake_diameter_um:g} µm) whose glints differ between the eyes, under a point light.")
+            except ImportError:
+                images = None
+        if images is None:
+            images = _stereo(recipe, brdf, w)
+            res.notes.append("Images: the statistical BRDF evaluated per pixel under a point light (no discrete-flake "
+                             "glints; install/enable nmmm.appearance.render for them).")
+        res.images.update(images)
+
+
+def _eye_positions_cm(im):
+    view_tilt = np.radians(30.0)
+    centre = np.array([0.0, -im.distance_cm * np.sin(view_tilt), im.distance_cm * np.cos(view_tilt)])
+    return centre
+
+
+def _stereo_rendered(recipe, brdf, w):
+    """Stereo pair by :func:`nmmm.appearance.render.render_stereo_plate` with a tiled cell of
+    discrete flakes (the seed paper's plate of unit cells)."""
+    from nmmm.appearance.flakes import FlakeList
+    from nmmm.appearance.render import PaintedPlate, PointLight, render_plate, render_stereo_plate
+
+    im = recipe.image
+    e = recipe.effect
+    cell = im.cell_um * 1e3
+    d = im.flake_diameter_um * 1e3
+    cv = 0.3
+    n = max(1, int(round(e.optical_depth * cell * cell / (np.pi * d * d / 4 * (1 + cv**2)))))
+    fl = FlakeList.random(brdf.flakes.optics, brdf.flakes.tilt, n, region_nm=(cell, cell), mean_diameter_nm=d,
+                          diameter_cv=cv, depth_range_nm=(2e3, 18e3), n_binder=e.coat_index,
+                          rng=im.seed)
+    plate = PaintedPlate(brdf, fl, (im.plate_cm[0] * 10.0, im.plate_cm[1] * 10.0))
+    centre = _eye_positions_cm(im) * 10.0
+    light = PointLight(tuple(np.asarray(im.light_position_cm, float) * 10.0), recipe.lighting.illuminants[0])
+    kw = dict(lights=[light], wavelength_nm=w)
+    if im.stereo:
+        left, right = render_stereo_plate(plate, position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0),
+                                          interocular_mm=im.eye_separation_cm * 10.0, fov_deg=im.fov_deg,
+                                          resolution=tuple(im.pixels), **kw)
+        return {"left eye": np.asarray(left.to_srgb(im.exposure), float),
+                "right eye": np.asarray(right.to_srgb(im.exposure), float)}
+    from nmmm.appearance.render import PinholeCamera
+
+    cam = PinholeCamera(position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0), fov_deg=im.fov_deg,
+                        resolution=tuple(im.pixels))
+    return {"view": np.asarray(render_plate(plate, cam, **kw).to_srgb(im.exposure), float)}
 
 
 def _stereo(recipe, brdf, w):
@@ -280,8 +332,7 @@ def _stereo(recipe, brdf, w):
     X, Y = np.meshgrid(x, y[::-1])
     P = np.stack([X, Y, np.zeros_like(X)], axis=-1).reshape(-1, 3)
     light = np.asarray(im.light_position_cm, float)
-    view_tilt = np.radians(30.0)
-    centre = np.array([0.0, -im.distance_cm * np.sin(view_tilt), im.distance_cm * np.cos(view_tilt)])
+    centre = _eye_positions_cm(im)
     eyes = {"left eye": centre + [-im.eye_separation_cm / 2, 0, 0], "right eye": centre + [im.eye_separation_cm / 2, 0, 0]}
     if not im.stereo:
         eyes = {"view": centre}

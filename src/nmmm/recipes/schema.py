@@ -314,6 +314,13 @@ class Image(_Strict):
     pixels: list[int] = Field(default_factory=lambda: [150, 100], min_length=2, max_length=2)
     stereo: bool = True
     exposure: Positive = 1.0
+    #: "auto": nmmm.appearance.render with discrete flakes (glints) when installed, else
+    #: "simple": the statistical BRDF evaluated per pixel (no glints)
+    renderer: Literal["auto", "simple"] = "auto"
+    cell_um: Positive = 450.0
+    flake_diameter_um: Positive = 15.0
+    fov_deg: Annotated[float, Field(gt=1.0, lt=120.0)] = 25.0
+    seed: int = 0
 
 
 class Lighting(_Strict):
