@@ -87,6 +87,13 @@ def test_model_errors(tmp_path):
         EllipsometryModel.from_dict({"substrate": 1.5, "layers": [{"name": "x", "n": 1.4}]})
     with pytest.raises(InvalidInputError, match="outside its bounds"):
         EllipsometryModel.from_dict({"substrate": {"model": "cauchy", "A": {"value": 5, "min": 1, "max": 2}}})
+    for fv in (1.5, -0.1, "half"):
+        with pytest.raises(RecipeError, match=r"fraction_void must be a volume fraction in \[0, 1\]"):
+            EllipsometryModel.from_dict({"substrate": 1.5, "layers": [
+                {"name": "r", "roughness": True, "thickness_nm": 3.0, "fraction_void": fv}]})
+    with pytest.raises(RecipeError, match="only to a roughness layer"):
+        EllipsometryModel.from_dict({"substrate": 1.5, "layers": [
+            {"name": "x", "n": 1.4, "thickness_nm": 3.0, "fraction_void": 0.3}]})
     p = tmp_path / "bad.toml"
     p.write_text("substrate = [\n")
     with pytest.raises(DataFileError, match="TOML"):

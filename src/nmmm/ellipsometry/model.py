@@ -313,9 +313,15 @@ class EllipsometryModel:
             if th.value < 0 or (th.vary and th.min < 0):
                 raise RecipeError(f"layer {lname!r}: thickness_nm must be >= 0 (and its min >= 0)")
             if lay.get("roughness", False):
-                fv = float(lay.get("fraction_void", 0.5))
-                layers.append(_Layer(lname, th, None, True, fv))
+                fv = lay.get("fraction_void", 0.5)
+                if isinstance(fv, bool) or not isinstance(fv, (int, float)) or not 0 <= fv <= 1:
+                    raise RecipeError(f"layer {lname!r}: fraction_void must be a volume fraction in [0, 1] "
+                                      f"(0.5 is the usual roughness), got {fv!r}")
+                layers.append(_Layer(lname, th, None, True, float(fv)))
             else:
+                if "fraction_void" in lay:
+                    raise RecipeError(f"layer {lname!r}: fraction_void applies only to a roughness layer "
+                                      "(roughness = true)")
                 layers.append(_Layer(lname, th, _Medium.from_spec(lname, lay, base)))
         return cls(str(spec.get("name", "model")), ambient, tuple(layers), substrate, dict(spec.get("fit", {})))
 
