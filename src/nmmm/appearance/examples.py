@@ -37,6 +37,20 @@ def grey_metallic_from_deposit(seed: int = 1, fraction: float = 0.008, tilt_std_
     return paint, flakes
 
 
+def _hematite_paint(w):
+    """Solid rusty-red paint (seed example 2): hematite (uniaxial mean of Querry), 250 nm
+    pseudo-cube diagonal, 7 % in the epoxy binder, 20 µm over a white substrate, base
+    from nmmm.layers (Mie + Kubelka–Munk), epoxy clear coat."""
+    from nmmm.appearance.brdf import opaque_paint_from_film
+    from nmmm.layers.distributions import equivalent_sphere_diameter, lognormal
+    from nmmm.layers.examples import epoxy_binder, hematite
+    from nmmm.layers.paint import PaintFilm
+
+    d = equivalent_sphere_diameter("cube", "volume", body_diagonal_nm=250.0)
+    film = PaintFilm(hematite(), epoxy_binder(), lognormal(d, 1.25, n_nodes=16), 0.07, 20e3, 0.8, 0.0)
+    return opaque_paint_from_film(film, w, name="solid hematite paint (7 %)")
+
+
 def _write_csv(path, rows):
     with open(path, "w", newline="") as fh:
         wr = csv.DictWriter(fh, fieldnames=list(rows[0]))
@@ -53,7 +67,7 @@ def demo(output_dir) -> dict:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from nmmm.appearance.brdf import interference_paint, opaque_paint, write_brdf_table
+    from nmmm.appearance.brdf import interference_paint, write_brdf_table
     from nmmm.appearance.multiangle import ASTM_E2539_ASPECULAR_DEG, multiangle_lab, plot_colour_travel
     from nmmm.appearance.sparkle import flake_glint_image, sparkle_graininess
 
@@ -84,7 +98,7 @@ def demo(output_dir) -> dict:
     _write_csv(out / "interference_multiangle.csv", rows_i)
 
     # 3. in-plane BRDFs -------------------------------------------------------------
-    solid = opaque_paint((w, np.where(w > 590, 0.75, 0.06)), name="solid red paint (step reflectance)")
+    solid = _hematite_paint(w)
     cs = multiangle_lab(solid, w, ASTM_E2539_ASPECULAR_DEG)
     th_v = np.linspace(-85, 85, 341)
     wi = np.array([np.sin(np.radians(45)), 0.0, np.cos(np.radians(45))])
@@ -119,7 +133,8 @@ def demo(output_dir) -> dict:
         sp_rows.append(dict(view=label, n_sparkles=m.n_sparkles, density_per_mm2=m.density_per_mm2,
                             sparkle_intensity=m.sparkle_intensity, graininess=m.graininess))
         vmax = vmax or max(np.percentile(img, 99.9), 3 * np.median(img))  # same scale for both views
-        ax.imshow(img, cmap="gray", vmin=0, vmax=vmax, extent=(0, 450, 450, 0))
+        ax.imshow(np.sqrt(np.clip(img / vmax, 0, 1)), cmap="gray", vmin=0, vmax=1,
+                  extent=(0, 450, 450, 0))  # square-root display stretch
         ax.set_title(f"{label}\n{m.density_per_mm2:.0f} sparkles/mm², S={m.sparkle_intensity:.3f}", fontsize=9)
         ax.set_xlabel("µm")
     fig.suptitle(f"Grey metallic paint, 450 µm cell, {len(flakes)} Al flakes: glints at 45° illumination")
@@ -141,7 +156,8 @@ def demo(output_dir) -> dict:
         f"({len(flakes)} flakes, optical depth τ = {flakes.optical_depth:.2f}, mean tilt "
         f"{metallic.flakes.tilt.mean_tilt_deg():.1f}°) under a smooth clear coat over a grey base: "
         f"L*15 = {cm.lightness_at(15):.1f}, L*45 = {cm.lightness_at(45):.1f}, L*110 = {cm.lightness_at(110):.1f}, "
-        f"flop index (Alman 1987) {fi:.1f}; a solid red paint has flop index {cs.flop_index():.2f}. "
+        f"flop index (Alman 1987) {fi:.1f}; the solid hematite paint (seed example 2, base from nmmm.layers) "
+        f"has flop index {cs.flop_index():.2f}. "
         f"Interference paints (seed example 4) change hue with angle: {ci_txt}. "
         f"The same flake list gives the sparkle images and, averaged, the statistical BRDF. "
         f"BRDF table: {tpath.name} (θ_h, θ_d, λ). Runtime {time.time() - t0:.0f} s."
