@@ -576,15 +576,16 @@ def _check_lights(lights, environment):
 
 
 def _light_at(lt, P):
-    """Directions to the light (n, 3), plane-irradiance factor (n,) (cos θi included)."""
+    """Directions to the light (n, 3) and the geometric factor (n,) of the plane irradiance
+    (cos θi, over r² in m² for a point light); the spectrum carries the power."""
     if isinstance(lt, DirectionalLight):
         d = np.broadcast_to(np.asarray(lt.direction), P.shape).copy()
-        s = np.full(P.shape[0], lt.irradiance) * d[:, 2]
+        s = d[:, 2].copy()
     else:
         v = np.asarray(lt.position_mm)[None, :] - P
         r2 = np.sum(v * v, axis=1)
         d = v / np.sqrt(r2)[:, None]
-        s = lt.intensity / (r2 * 1e-6) * d[:, 2]
+        s = d[:, 2] / (r2 * 1e-6)
     ok = d[:, 2] > 0
     d[~ok] = (0.0, 0.0, 1.0)
     s = np.where(ok, s, 0.0)
@@ -767,7 +768,7 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     nl = len(lights)
     lkind = np.array([0 if isinstance(lt, DirectionalLight) else 1 for lt in lights], np.int64)
     lvec = np.array([lt.direction if isinstance(lt, DirectionalLight) else lt.position_mm for lt in lights], float)
-    lscale = np.array([lt.irradiance if isinstance(lt, DirectionalLight) else lt.intensity for lt in lights], float)
+    lscale = np.ones(nl)  # the light spectra (espec) carry the irradiance / intensity
     cam = np.asarray(camera.position_mm, float)
     r, u, f = camera.basis()
     tx, ty = camera.tan_half
