@@ -37,6 +37,7 @@ def test_fit_data_made_by_pyelli(silicon, elli_table):
     assert res["epoxy.A"] == pytest.approx(n0, abs=1e-8)
     assert res["epoxy.B"] == pytest.approx(b_um2, abs=1e-8)
     assert res.chi2 < 1e-12
+    assert np.all(np.isfinite(res.correlation)) and np.allclose(np.diag(res.correlation), 1.0)  # exact data
 
 
 def test_round_trip_with_noise_within_uncertainties():

@@ -253,12 +253,13 @@ def least_squares_fit(residual_function: Callable, parameters, *,
             f"{', '.join(involved)} has no effect on Psi/Delta. Fix one of them (vary=False) or add data "
             "(angles, wavelengths)", history=list(history))
     cov = (vt.T / s**2) @ vt
+    sd = np.sqrt(np.diag(cov))
+    corr = cov / np.outer(sd, sd)  # before the χ² scaling, which cancels here but is 0 for exact data
     chi2 = float(res.fun @ res.fun)
     dof = n_res - m
     if not absolute_sigma:
         cov = cov * chi2 / dof
     err = np.sqrt(np.diag(cov))
-    corr = cov / np.outer(err, err)
     new_params = tuple(replace(p, value=best[p.name]) for p in params)
     span = hi - lo
     at_b = tuple(n for n, x, a, b, sp in zip(names, res.x, lo, hi, span)
