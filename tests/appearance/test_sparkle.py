@@ -74,3 +74,36 @@ def test_bad_input():
         sparkle_graininess(-np.ones((10, 10)), 1.0)
     with pytest.raises(InvalidInputError):
         relative_luminance(np.ones((4, 4)), encoding="gamma")
+
+
+def test_flake_glint_image_radiometry_matches_the_statistical_lobe():
+    """Mean of a glint image of many flakes = π/cosθo ∫ f_flakes cosθ K_acceptance dω."""
+    from nmmm.appearance.brdf import ClearCoat, PaintBRDF
+    from nmmm.appearance.flakes import FlakeList, aluminium_flakes, gaussian_tilt
+    from nmmm.appearance.sparkle import flake_glint_image
+
+    w = np.arange(400.0, 701.0, 50.0)
+    fl = FlakeList.random(aluminium_flakes(), gaussian_tilt(10.0), 30000, region_nm=(2e6, 2e6),
+                          mean_diameter_nm=10e3, diameter_cv=0.0, rng=11)
+    paint = PaintBRDF(ClearCoat(1.5), 0.0, fl.to_flake_layer())
+    wi = np.array([np.sin(np.radians(45)), 0, np.cos(np.radians(45))])
+    tv = np.radians(35.0)
+    wo = np.array([-np.sin(tv), 0, np.cos(tv)])
+    sig = 4.0
+    img = flake_glint_image(paint, fl, w, wi, wo, pixel_size_um=20.0, acceptance_deg=sig, background=False)
+    # expected value by quadrature over directions around wo
+    from nmmm.appearance.colorimetry import weighting_factors
+
+    Wy = weighting_factors(w, illuminant=np.ones_like(w), observer="10")[:, 1] / 100.0
+    s = np.radians(sig)
+    u = np.linspace(-4 * s, 4 * s, 61)
+    du = u[1] - u[0]
+    U, V = np.meshgrid(u, u, indexing="ij")
+    e1 = np.array([np.cos(tv), 0, np.sin(tv)])  # tangent vectors at wo
+    e2 = np.array([0.0, 1.0, 0.0])
+    d = wo + U[..., None] * e1 + V[..., None] * e2
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    K = np.exp(-0.5 * (U ** 2 + V ** 2) / s ** 2) / (2 * np.pi * s * s)
+    f = paint(w, wi, d, components="flakes") @ Wy
+    expected = np.pi / wo[2] * np.sum(f * d[..., 2] * K) * du * du
+    assert img.mean() == pytest.approx(expected, rel=0.1)

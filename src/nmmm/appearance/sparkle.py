@@ -198,7 +198,9 @@ def flake_glint_image(paint, flakes, wavelength_nm, wi, wo, pixel_size_um: float
         xs = (np.arange(x0, x1) + 0.5) * ps
         ys = (np.arange(y0, y1) + 0.5) * ps
         disc = ((xs[None, :] - cx) ** 2 + (ys[:, None] - cy) ** 2) <= r * r
-        npx = max(disc.sum(), 1)
+        if not disc.any():  # a flake smaller than a pixel: all its light in the pixel of its centre
+            disc[min(max(int(cy // ps) - y0, 0), y1 - y0 - 1), min(max(int(cx // ps) - x0, 0), x1 - x0 - 1)] = True
+        npx = disc.sum()
         # the flake's share of the patch's reflectance factor, concentrated on its pixels
         img[y0:y1, x0:x1] += disc * Yk[k] * (area_patch / (ps * ps)) / npx
     if background:
