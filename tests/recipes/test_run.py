@@ -89,6 +89,10 @@ def test_hematite_paint_reads_red_and_bigger_grains_look_darker(tmp_path):
     assert np.all((white >= 0) & (white <= 1))
     big = run_recipe(set_key(raw, "pigment.body_diagonal_nm", 1000.0), tmp_path / "b", progress=False, report=False)
     assert big.scalars["L_D65"] < res.scalars["L_D65"]  # seed paper: bigger grains look darker
+    # 45°/0° (multi-angle, solid-paint BRDF) and 0°/d specular excluded (Saunderson) see the same
+    # Lambertian body through the same interface: their lightness must agree closely
+    L45 = next(r["L"] for r in res.multiangle if r["aspecular_deg"] == 45.0)
+    assert abs(L45 - res.scalars["L_D65"]) < 2.0
     assert big.scalars["equivalent_diameter_nm"] == pytest.approx(1000 / np.sqrt(3) * (6 / np.pi) ** (1 / 3))
 
 

@@ -47,7 +47,8 @@ def _check_same(a, b):
 
 
 def test_cluster_gives_the_serial_numbers(client, serial_results, tmp_path):
-    s = sweep(_raw(), VARY, tmp_path, client=client, progress=False)
+    # through the scheduler's address, as `nmmm sweep --scheduler tcp://HOST:8786` does
+    s = sweep(_raw(), VARY, tmp_path, scheduler=client.scheduler.address, progress=False)
     assert s["n_points"] == 6 and s["n_computed"] == 6
     assert s["results"]["worker"].nunique() >= 1
     assert len(list((tmp_path / "points").glob("*.parquet"))) == 6

@@ -173,6 +173,13 @@ def _film(recipe, mats, w, res):
     if f.substrate_reflectance > 0:
         rb = paint_reflectance(film(0.0), w, solver=f.solver, specular=f.specular, quad_pts=f.quad_pts)
         res.spectra["reflectance (black substrate)"] = rb.reflectance
+    if recipe.viewing.multiangle:
+        from nmmm.appearance.brdf import opaque_paint_from_film
+
+        _multiangle(recipe, opaque_paint_from_film(film(f.substrate_reflectance), w, name=recipe.name), w, res,
+                    add_spectra=False)
+        res.notes.append("Multi-angle colour: the same film as the base of a solid paint BRDF "
+                         "(nmmm.appearance.brdf.opaque_paint_from_film: Kubelka–Munk body under a smooth coat of the binder).")
     res.notes.append(f"Paint film: {pg.compound} {pg.shape}s (equal-{pg.equivalent_sphere} sphere D = {d:.1f} nm, "
                      f"geometric spread {pg.size_spread:g}) at volume fraction {pg.fraction:g} in {recipe.binder.compound}; "
                      f"film {f.thickness_nm / 1e3:g} µm, clear coat {f.clear_coat_nm / 1e3:g} µm, solver {f.solver}, "
@@ -225,24 +232,23 @@ def _effect_brdf(recipe):
                      FlakeLayer(optics, gaussian_tilt(e.tilt_deg), e.optical_depth), name=recipe.name)
 
 
-def _effect(recipe, mats, w, res):
+def _multiangle(recipe, brdf, w, res, add_spectra: bool):
+    """Reflectance factors π f at the aspecular angles of ``[viewing]`` and their CIELAB."""
     from nmmm.appearance.colorimetry import spectra_to_lab
 
-    brdf = _effect_brdf(recipe)
     v = recipe.viewing
     g = np.asarray(v.aspecular_deg, float)
     th_i = np.radians(v.illumination_deg)
     th_v = np.radians(v.illumination_deg - g)
-    wi = np.stack([np.full_like(g, -np.sin(th_i)), np.zeros_like(g), np.full_like(g, np.cos(th_i))], axis=-1)
-    wo = np.stack([np.sin(th_v), np.zeros_like(g), np.cos(th_v)], axis=-1)
     if np.any(np.abs(th_v) >= np.pi / 2):
         raise RecipeError("viewing.aspecular_deg: a detector angle lies below the horizon "
                           f"(illumination {v.illumination_deg:g}° − aspecular must be in (−90°, 90°))")
+    wi = np.stack([np.full_like(g, -np.sin(th_i)), np.zeros_like(g), np.full_like(g, np.cos(th_i))], axis=-1)
+    wo = np.stack([np.sin(th_v), np.zeros_like(g), np.cos(th_v)], axis=-1)
     Rf = np.pi * np.asarray(brdf(w, wi, wo), float)
-    for j, a in enumerate(g):
-        label = f"reflectance factor (aspecular {a:g}°)"
-        res.spectra[label] = Rf[j]
-    res.primary = f"reflectance factor (aspecular {g[np.argmin(np.abs(g - 45))]:g}°)"
+    if add_spectra:
+        for j, a in enumerate(g):
+            res.spectra[f"reflectance factor (aspecular {a:g}°)"] = Rf[j]
     ill = recipe.lighting.illuminants[0]
     lab = spectra_to_lab(w, Rf, illuminant=ill, observer=recipe.lighting.observer)
     for a, (L, A, B) in zip(g, lab):
@@ -254,8 +260,16 @@ def _effect(recipe, mats, w, res):
             from nmmm.appearance.multiangle import flop_index_alman1987
 
             res.scalars["flop_index"] = float(flop_index_alman1987(Ls[15.0], Ls[45.0], Ls[110.0]))
-        except ImportError:
+        except ImportError:  # pragma: no cover - Alman (1987) as in nmmm.appearance.multiangle
             res.scalars["flop_index"] = float(2.69 * (Ls[15.0] - Ls[110.0]) ** 1.11 / Ls[45.0] ** 0.86)
+    return g
+
+
+def _effect(recipe, mats, w, res):
+    brdf = _effect_brdf(recipe)
+    v = recipe.viewing
+    g = _multiangle(recipe, brdf, w, res, add_spectra=True)
+    res.primary = f"reflectance factor (aspecular {g[np.argmin(np.abs(g - 45))]:g}°)"
     res.notes.append(f"Flake paint BRDF ({recipe.effect.flakes} flakes, optical depth {recipe.effect.optical_depth:g}, "
                      f"Gaussian tilt σ = {recipe.effect.tilt_deg:g}°, base reflectance {recipe.effect.body_reflectance:g}); "
                      f"reflectance factors π f at {v.illumination_deg:g}° illumination, in the plane of incidence.")

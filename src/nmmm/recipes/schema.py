@@ -341,6 +341,8 @@ class Lighting(_Strict):
 class Viewing(_Strict):
     illumination_deg: AngleDeg = 45.0
     aspecular_deg: list[AspecularDeg] = Field(default_factory=lambda: [-15.0, 15.0, 25.0, 45.0, 75.0, 110.0], min_length=1)
+    #: multi-angle colour of a [film] too (as a solid paint under a smooth coat of its binder)
+    multiangle: bool = True
 
 
 class Outputs(_Strict):
