@@ -197,3 +197,26 @@ def test_green_operator_is_a_real_orthogonal_projection(name, shape):
 def test_green_operator_storage_is_one_dimensional():
     op = green_operator((64, 64, 64), "willot2015")
     assert all(a.shape == (64,) for a in op.a) and all(b.shape == (64,) for b in op.b)
+
+
+def test_cli_run(tmp_path):
+    from click.testing import CliRunner
+
+    from nmmm.homogenize.cli import homogenize as group
+
+    np.savez(tmp_path / "cell.npz", labels=G.laminate(8, 0.5, axis=0, ndim=2))
+    path = tmp_path / "cell.npz"
+    try:
+        from nmmm.microstructure import Microstructure, save_microstructure
+
+        save_microstructure(Microstructure(G.laminate(8, 0.5, axis=0, ndim=2), voxel_nm=1.0), tmp_path / "cell.tif")
+        path = tmp_path / "cell.tif"
+    except Exception:  # pragma: no cover - depends on the microstructure package's writer
+        pass
+    res = CliRunner().invoke(group, ["run", str(path), "--eps", "0=2.25", "--eps", "1=-10+1i", "--json"])
+    assert res.exit_code == 0, res.output
+    import json
+
+    t = json.loads(res.output)["tensor"]
+    _, harm = laminate_means(2.25, -10 + 1j, 0.5)
+    assert complex(*t[0][0]) == pytest.approx(harm, abs=1e-8)
