@@ -96,6 +96,15 @@ def test_cube_jamming_limit_scaled_by_shape():
         M.hardcore_pseudocubes((64, 64, 64), 10.0, 250.0, 0.15, exponent=math.inf)
 
 
+def test_rsa_centres_bad_input():
+    with pytest.raises(InvalidInputError, match="exclusion_radii_nm must be > 0"):
+        M.rsa_centres((100.0, 100.0), np.array([-1.0, 2.0]), seed=0)
+    with pytest.raises(InvalidInputError, match="exclusion_radii_nm contains NaN"):
+        M.rsa_centres((100.0, 100.0), np.array([np.nan, 2.0]), seed=0)
+    with pytest.raises(InvalidInputError, match="box_nm"):
+        M.rsa_centres((-100.0, 100.0), np.array([1.0, 2.0]), seed=0)
+
+
 def test_close_to_jamming_raises_convergence_error():
     with pytest.raises(ConvergenceError, match="jamming"):
         M.hardcore_particles((300.0, 300.0), "sphere", 3.0, 0.53, seed=0, max_attempts=20_000)

@@ -53,7 +53,7 @@ from nmmm.errors import ConvergenceError, InvalidInputError
 from nmmm.microstructure.base import Microstructure, as_box_nm, as_size_distribution, random_rotations, seed_param
 from nmmm.microstructure.boolean import cell_box_nm
 from nmmm.microstructure.particles import SHAPES, ParticleSet, superball_volume
-from nmmm.spectra import check_fraction
+from nmmm.spectra import check_fraction, check_positive
 
 __all__ = [
     "RSA_JAMMING",
@@ -168,9 +168,16 @@ def rsa_centres(box_nm, exclusion_radii_nm, seed=None, periodic: bool = True, ma
         When ``max_attempts`` trials could not place all particles (the packing is too
         close to jamming); ``history`` holds the number placed.
     """
-    box = np.array([float(b) for b in box_nm] + [0.0] * (3 - len(box_nm)))
+    box_nm = as_box_nm(box_nm)
+    box = np.array(list(box_nm) + [0.0] * (3 - len(box_nm)))
     ndim = len(box_nm)
-    radii = np.ascontiguousarray(exclusion_radii_nm, float)
+    radii = np.ascontiguousarray(np.atleast_1d(exclusion_radii_nm), float)
+    if radii.ndim != 1:
+        raise InvalidInputError(
+            f"exclusion_radii_nm must be a 1-D array (one radius per particle), got shape {radii.shape}"
+        )
+    if radii.size:
+        check_positive(radii, "exclusion_radii_nm")
     n = radii.size
     centres = np.zeros((n, 3))
     if n == 0:
@@ -366,7 +373,7 @@ def hardcore_particles(
         "size_meaning": "radius" if shape == "sphere" else "large diagonal",
         "target_fraction": p,
         "exclusion_nm": float(exclusion_nm),
-        "exclusion_radius_nm": float(rex.mean()),
+        "exclusion_radius_nm": float(rex.mean() if n else circ_per_size * dist.mean_nm + exclusion_nm / 2),
         "seed": seed_param(seed),
         "box_nm": list(box),
     }
