@@ -756,8 +756,13 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     fpos = np.ascontiguousarray(fl.positions_nm * 1e-6)
     fnrm = np.ascontiguousarray(fl.normals)
     farea = fl.areas_nm2 * 1e-12
-    top, bottom = fl.layer_depth_nm
-    fzeta = np.clip((fl.depth_nm - top) / max(bottom - top, 1e-9), 0.0, 1.0)
+    # attenuation by the flakes above each flake: exp(-τ_e S ζ) with ζ = τ_above / τ, the
+    # same mean-field factor as nmmm.appearance.brdf.flake_list_reflection
+    if hasattr(fl, "optical_depth_above") and fl.optical_depth > 0:
+        fzeta = np.asarray(fl.optical_depth_above(), float) / fl.optical_depth
+    else:
+        top, bottom = fl.layer_depth_nm
+        fzeta = np.clip((fl.depth_nm - top) / max(bottom - top, 1e-9), 0.0, 1.0)
     cut = 3.0
     G = int(np.clip(4.0 / (0.75 * cut * sigma), 4, 512))
     bx = np.clip(((fnrm[:, 0] + 1) * 0.5 * G).astype(np.int64), 0, G - 1)
