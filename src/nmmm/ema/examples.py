@@ -109,6 +109,16 @@ def _range_text(th_mm, ok):
     return " and ".join(f"{a:.2g}–{b:.2g} mm" for a, b in runs)
 
 
+def _save_figure(fig, path) -> str:
+    """Lay out, write (120 dpi) and close a demo figure; returns its path."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return str(path)
+
+
 def gold_ruby_demo(output_dir) -> dict:
     """Gold-ruby glass (seed example 1): figures and tables into ``output_dir``.
 
@@ -147,11 +157,7 @@ def gold_ruby_demo(output_dir) -> dict:
     a2.set_xlabel("wavelength (nm)")
     a2.legend()
     a1.set_title(f"Gold-ruby glass: n and k (plasmon absorption peak {peak_nm:.0f} nm)")
-    fig.tight_layout()
-    p = out / "gold_ruby_nk.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    figures.append(str(p))
+    figures.append(_save_figure(fig, out / "gold_ruby_nk.png"))
     p = out / "gold_ruby_nk.csv"
     np.savetxt(p, np.column_stack([w_fig, nk_s.real, nk_s.imag, nk_g.real, nk_g.imag]), delimiter=",",
                header="wavelength_nm,n_silica,k_silica,n_composite,k_composite", comments="", fmt="%.8g")
@@ -187,11 +193,7 @@ def gold_ruby_demo(output_dir) -> dict:
     ax.set_ylabel("transmittance")
     ax.set_title("Gold-ruby glass plates (p = 0.0005): Beer–Lambert + Fresnel")
     ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    p = out / "gold_ruby_transmission.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    figures.append(str(p))
+    figures.append(_save_figure(fig, out / "gold_ruby_transmission.png"))
 
     lab5 = {ill: _colour(w, plate_transmittance(nk, w, 5e6), ill)[0] for ill in ("D65", "A")}
     lab_show = {ill: _colour(w, T_show, ill) for ill in ("D65", "A")}
@@ -204,11 +206,7 @@ def gold_ruby_demo(output_dir) -> dict:
         ax.set_yticks([])
         ax.set_ylabel(ill)
     axes[0].set_title("Gold-ruby glass in transmission (sRGB swatches)")
-    fig.tight_layout()
-    p = out / "gold_ruby_swatches.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    figures.append(str(p))
+    figures.append(_save_figure(fig, out / "gold_ruby_swatches.png"))
 
     # -- gold rods (randomly oriented prolate spheroids) -------------------------------------
     ratios = [1.0, 2.0, 3.0, 4.0]
@@ -239,11 +237,7 @@ def gold_ruby_demo(output_dir) -> dict:
     ax2.set_yticklabels([f"AR {ar:g}" for ar in ratios])
     ax2.set_xticks([])
     ax2.set_title(f"{rod_mm:g} mm plate, D65")
-    fig.tight_layout()
-    p = out / "gold_rods.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    figures.append(str(p))
+    figures.append(_save_figure(fig, out / "gold_rods.png"))
     tables["gold_rods"] = rod_rows
 
     # -- causality: n changes with k -----------------------------------------------------------
@@ -255,11 +249,7 @@ def gold_ruby_demo(output_dir) -> dict:
     ax.set_xlabel("wavelength (nm)")
     ax.legend(fontsize=8)
     ax.set_title(f"Causality: Δn follows from Δk (max error {100 * kk.relative_error:.1f} % of the swing)")
-    fig.tight_layout()
-    p = out / "gold_ruby_kramers_kronig.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    figures.append(str(p))
+    figures.append(_save_figure(fig, out / "gold_ruby_kramers_kronig.png"))
 
     # -- bounds in the complex plane (Bergman–Milton) at the plasmon wavelength -----------------
     from nmmm.ema.bounds import bergman_milton_bounds
@@ -282,11 +272,7 @@ def gold_ruby_demo(output_dir) -> dict:
     ax.set_ylabel("Im ε")
     ax.set_title(f"Gold + silica at {peak_nm:.0f} nm: Wiener (light) and HS (dark) regions")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    p = out / "gold_silica_bounds.png"
-    fig.savefig(p, dpi=120)
-    plt.close(fig)
-    figures.append(str(p))
+    figures.append(_save_figure(fig, out / "gold_silica_bounds.png"))
 
     # -- size correction (Doyle) ---------------------------------------------------------------
     size_rows = []
