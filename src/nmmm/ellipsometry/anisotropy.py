@@ -38,9 +38,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nmmm.ellipsometry.forward import psi_delta_from_rho, uniaxial_bulk_rho, wrap_delta
-from nmmm.ellipsometry.point_by_point import batched_levenberg_marquardt, group_wavelengths
+from nmmm.ellipsometry.point_by_point import (_raise_unconverged, _uncertainties, batched_levenberg_marquardt,
+                                               group_wavelengths)
 from nmmm.ellipsometry.pseudo_dielectric import pseudo_dielectric
-from nmmm.errors import ConvergenceError, InvalidInputError
+from nmmm.errors import InvalidInputError
 from nmmm.materials.material import eps_to_nk
 
 __all__ = ["uniaxial_from_two_orientations", "UniaxialResult", "synthetic_uniaxial_data"]
@@ -197,20 +198,11 @@ def uniaxial_from_two_orientations(data_parallel, data_perpendicular, *, eps_amb
 
     x, info = batched_levenberg_marquardt(residuals, x0, gid, lower=np.array([1e-6, 0, 1e-6, 0]),
                                           max_iter=max_iter)
-    jtj = info["jtj"]
-    cov = np.full(jtj.shape, np.nan)
-    ok = np.abs(np.linalg.det(jtj)) > 1e-300
-    cov[ok] = np.linalg.inv(jtj[ok])
-    if not d1.has_sigma:
-        dof = 2 * info["n_points"] - 4
-        cov = cov * np.where(dof > 0, info["chi2"] / np.maximum(dof, 1), np.nan)[:, None, None]
-    sig = np.sqrt(np.abs(np.einsum("gii->gi", cov)))
+    sig = _uncertainties(info, d1.has_sigma, 2)  # 2 residuals (Ψ, Δ) per point, 4 unknowns
     conv = info["converged"]
-    if raise_on_failure and not conv.all():
-        bad = wl[~conv]
-        raise ConvergenceError(
-            f"two-orientation inversion did not converge at {bad.size} wavelength(s) "
-            f"({', '.join(f'{b:g}' for b in bad[:8])} nm); check that the two data sets are the "
-            "parallel and perpendicular orientations, or pass raise_on_failure=False", history=info["history"])
+    if raise_on_failure:
+        _raise_unconverged("two-orientation inversion", wl, info,
+                           "; check that the two data sets are the parallel and perpendicular orientations, "
+                           "or pass raise_on_failure=False")
     return UniaxialResult(wl, x[:, 0] + 1j * x[:, 1], x[:, 2] + 1j * x[:, 3], sig[:, :2], sig[:, 2:],
                           info["chi2"], conv, name, info)

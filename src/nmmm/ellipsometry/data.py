@@ -286,12 +286,19 @@ def write_csv(data: EllipsometryData, path) -> Path:
     if data.has_sigma:
         cols += ["sigma_psi_deg", "sigma_delta_deg"]
         arrs += [data.sigma_psi_deg, data.sigma_delta_deg]
+    return _write_columns(path, [f"{data.name}: ellipsometric angles, Delta convention of nmmm.ellipsometry.forward"],
+                          cols, arrs)
+
+
+def _write_columns(path: Path, comments, cols, arrs) -> Path:
+    """A CSV of ``#`` comment lines, a header row and columns written with 10 significant digits."""
     with path.open("w", newline="") as f:
-        f.write(f"# {data.name}: ellipsometric angles, Delta convention of nmmm.ellipsometry.forward\n")
-        w = csv.writer(f)
-        w.writerow(cols)
+        for line in comments:
+            f.write(f"# {line}\n")
+        wr = csv.writer(f)
+        wr.writerow(cols)
         for row in zip(*arrs):
-            w.writerow([f"{v:.10g}" for v in row])
+            wr.writerow([f"{v:.10g}" for v in row])
     return path
 
 
@@ -402,12 +409,4 @@ def write_material_csv(path, wavelength_nm, nk, name: str = "fitted", reference:
     if sigma_n is not None and sigma_k is not None:
         cols += ["sigma_n", "sigma_k"]
         arrs += [np.asarray(sigma_n, float).ravel()[order], np.asarray(sigma_k, float).ravel()[order]]
-    with path.open("w", newline="") as f:
-        f.write(f"# name: {name}\n")
-        if reference:
-            f.write(f"# reference: {reference}\n")
-        wr = csv.writer(f)
-        wr.writerow(cols)
-        for row in zip(*arrs):
-            wr.writerow([f"{v:.10g}" for v in row])
-    return path
+    return _write_columns(path, [f"name: {name}"] + ([f"reference: {reference}"] if reference else []), cols, arrs)

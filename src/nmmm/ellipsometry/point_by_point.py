@@ -221,6 +221,18 @@ def _uncertainties(info, has_sigma: bool, n_res_per_point: int):
     return np.sqrt(np.abs(np.einsum("gii->gi", cov)))
 
 
+def _raise_unconverged(what: str, wl, info, advice: str):
+    """ConvergenceError listing the wavelengths (of ``wl``) where ``info["converged"]`` is False."""
+    conv = info["converged"]
+    if conv.all():
+        return
+    bad = wl[~conv]
+    raise ConvergenceError(
+        f"{what} did not converge at {bad.size} wavelength(s) "
+        f"({', '.join(f'{b:g}' for b in bad[:8])}{' ...' if bad.size > 8 else ''} nm) {advice}",
+        history=info["history"])
+
+
 def point_by_point(data, model, layer: str, values: dict | None = None, start=None, *, max_iter: int = 100,
                    raise_on_failure: bool = True) -> PointByPointResult:
     """Invert n and k of ``layer`` at every measured wavelength, the rest of the model fixed.
@@ -296,13 +308,10 @@ def point_by_point(data, model, layer: str, values: dict | None = None, start=No
                                           upper=np.array([np.inf, np.inf]), max_iter=max_iter)
     sig = _uncertainties(info, data.has_sigma, 2)
     conv = info["converged"]
-    if raise_on_failure and not conv.all():
-        bad = wl[~conv]
-        raise ConvergenceError(
-            f"point-by-point inversion of {layer!r} did not converge at {bad.size} wavelength(s) "
-            f"({', '.join(f'{b:g}' for b in bad[:8])}{' ...' if bad.size > 8 else ''} nm) in {max_iter} "
-            "iterations; start from a better dispersion fit (start=) or raise max_iter, or pass "
-            "raise_on_failure=False to inspect result.converged", history=info["history"])
+    if raise_on_failure:
+        _raise_unconverged(f"point-by-point inversion of {layer!r}", wl, info,
+                           f"in {max_iter} iterations; start from a better dispersion fit (start=) or raise "
+                           "max_iter, or pass raise_on_failure=False to inspect result.converged")
     return PointByPointResult(wl, x[:, 0] + 1j * x[:, 1], sig[:, 0], sig[:, 1], info["chi2"], conv, layer, info)
 
 
