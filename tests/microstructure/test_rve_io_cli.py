@@ -1,5 +1,6 @@
 """RVE (Kanit et al. 2003) against the analytic variance of a Boolean model; files; CLI."""
 
+import json
 import math
 
 import numpy as np
@@ -86,7 +87,12 @@ def test_cli_generate_and_analyze(tmp_path):
     Image.fromarray((m.labels.T * 200 + 20).astype(np.uint8)).save(png)
     r = CliRunner().invoke(micro, ["analyze", str(png), "--pixel-nm", "10", "--json"])
     assert r.exit_code == 0, r.output
-    assert "exclusion_radius_nm" in r.output and (tmp_path / "sem_analysis.png").exists()
+    assert (tmp_path / "sem_analysis.png").exists()
+    est = json.loads(r.output[: r.output.rindex("}") + 1])
+    # the model that made the image: discs of 60 nm with a 30 nm gap, i.e. exclusion
+    # radius 60 + 30/2 = 75 nm (RSA reaches contact); pixel 10 nm
+    assert est["exclusion_radius_nm"] == pytest.approx(75.0, abs=10.0)
+    assert est["area_fraction"] == pytest.approx(m.volume_fraction(), abs=0.01)
     bad = tmp_path / "bad.toml"
     bad.write_text('model = "hardcore_spheres"\nshape = [64, 64, 64]\nvoxel_nm = 1.0\nradius_nm = 4\nfraction = 0.5\n')
     r = CliRunner().invoke(micro, ["generate", str(bad)])
