@@ -87,6 +87,9 @@ def test_csv_errors(tmp_path):
     p.write_text("wavelength_nm,angle_deg,psi_deg,delta_deg\n500,70,abc,120\n")
     with pytest.raises(DataFileError, match="row 2"):
         read_csv(p)
+    p.write_text("wavelength_nm,angle_deg,psi_deg,delta_deg,sigma_psi_deg\n500,70,30,120,0.01\n")
+    with pytest.raises(DataFileError, match="no sigma_delta_deg"):
+        read_csv(p)
     with pytest.raises(DataFileError, match="not found"):
         read_csv(tmp_path / "missing.csv")
     with pytest.raises(InvalidInputError, match="angle"):

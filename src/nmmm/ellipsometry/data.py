@@ -268,6 +268,11 @@ def read_csv(path, name: str | None = None) -> EllipsometryData:
             raise DataFileError(f"{path}: photon energies must be > 0 eV")
         wl = HC_EV_NM / wl
     has_sig = "sigma_psi_deg" in col and "sigma_delta_deg" in col
+    if ("sigma_psi_deg" in col) != ("sigma_delta_deg" in col):
+        given, absent = ("sigma_psi_deg", "sigma_delta_deg") if "sigma_psi_deg" in col else \
+            ("sigma_delta_deg", "sigma_psi_deg")
+        raise DataFileError(f"{path}: has a {given} column but no {absent}; give both uncertainty columns "
+                            "or neither (without them the fit scales its covariance by the reduced chi²)")
     try:
         return EllipsometryData(
             wl, arr[:, col["angle_deg"]], arr[:, col["psi_deg"]], arr[:, col["delta_deg"]],
