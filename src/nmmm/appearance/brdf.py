@@ -603,8 +603,8 @@ class _Tables:
         # multiple-scattering compensation (Kulla & Conty 2017)
         self.Dms = np.clip(1.0 - self.E10, 0.0, 1.0)
         E0_bar = 2 * (w_e * mu_e) @ _lerp_table(self.E10, th_e, self.astep)
-        sub = 2 * (w_e * mu_e) @ (_lerp_table(self.E1 - self.Es_tab_a(tha), th_e, self.astep))
-        sub0 = 2 * (w_e * mu_e) @ (_lerp_table(self.E10 - self.Es_tab_a(tha), th_e, self.astep))
+        sub = 2 * (w_e * mu_e) @ (_lerp_table(self.E1 - self._es_at(tha), th_e, self.astep))
+        sub0 = 2 * (w_e * mu_e) @ (_lerp_table(self.E10 - self._es_at(tha), th_e, self.astep))
         with np.errstate(divide="ignore", invalid="ignore"):
             fbar = np.where(sub0 > 1e-12, np.clip(sub / sub0, 0, 1), 0.0)
             Fms = fbar ** 2 * E0_bar / (1 - fbar * (1 - E0_bar))
@@ -689,7 +689,7 @@ class _Tables:
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(ms0 > 1e-12, np.clip(ms / ms0, 0.0, 1.0), 0.0)
 
-    def Es_tab_a(self, tha):
+    def _es_at(self, tha):
         return _lerp_table(self.Es, tha, self.step)
 
     def _flake_albedo(self, mua, n_theta: int = 24, n_phi: int = 32):
