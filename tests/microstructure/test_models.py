@@ -153,6 +153,24 @@ def test_aggregates_cluster_more_than_poisson():
     assert M.integral_range(agg) > 2 * M.integral_range(boo)
 
 
+def test_aggregate_counts_follow_the_cluster_process():
+    # parents: Poisson number with mean p|W| / (mu V); children per parent 1 + Poisson(mu - 1)
+    # (mean mu, variance mu - 1): both within 4 standard errors
+    p, mu, r, box = 0.02, 6.0, 5.0, (4000.0, 4000.0)
+    ps = M.aggregate_particles(box, r, 40.0, mu, p, seed=3)
+    n_agg = ps.params["n_aggregates"]
+    lam = p * box[0] * box[1] / (mu * math.pi * r**2)
+    assert abs(n_agg - lam) < 4 * math.sqrt(lam)
+    assert abs(len(ps) / n_agg - mu) < 4 * math.sqrt((mu - 1) / n_agg)
+    # clustered: the median nearest-neighbour distance is well below that of a Poisson
+    # process of the same density, sqrt(ln 2 / (pi rho)) (here about half of it)
+    from scipy.spatial import cKDTree
+
+    d, _ = cKDTree(ps.centres_nm[:, :2], boxsize=box).query(ps.centres_nm[:, :2], k=2)
+    rho = len(ps) / (box[0] * box[1])
+    assert np.median(d[:, 1]) < 0.7 * math.sqrt(math.log(2) / (math.pi * rho))
+
+
 def test_flake_deposit_statistics_and_rasterisation():
     f = M.flake_deposit(box_nm=(100_000.0, 100_000.0, 20_000.0), diameter_nm=15_000.0, thickness_nm=400.0,
                         fraction=0.03, tilt_std_deg=3.0, exclusion_nm=100.0, seed=3)
