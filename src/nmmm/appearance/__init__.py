@@ -1,7 +1,18 @@
 """nmmm.appearance — macro scale: colorimetry, BRDFs of paints, multi-angle colour, rendering.
 
 - :mod:`~nmmm.appearance.colorimetry` — spectra → XYZ → CIELAB, ΔE2000, sRGB.
+- :mod:`~nmmm.appearance.brdf` — spectral BRDFs of clear, opaque, metallic and
+  interference paints (:class:`PaintBRDF`), BRDF tables for renderers.
+- :mod:`~nmmm.appearance.flakes` — flake tilt distributions, flake optics, discrete flake lists.
+- :mod:`~nmmm.appearance.multiangle` — CIELAB at the ASTM E2194 / E2539 geometries, flop index.
+- :mod:`~nmmm.appearance.sparkle` — sparkle and graininess of images (renders or photographs).
+- :mod:`~nmmm.appearance.render` — spectral plate renderer, stereo pairs, OpenEXR, Mitsuba.
+
+The BRDF, flake, multi-angle and sparkle names are imported on first use (PEP 562), so that
+``import nmmm.appearance`` for colorimetry stays light.
 """
+
+import importlib
 
 from nmmm.appearance.colorimetry import (
     delta_e2000,
@@ -14,6 +25,25 @@ from nmmm.appearance.colorimetry import (
     xyz_to_srgb,
 )
 
+_LAZY = {
+    "PaintBRDF": "brdf", "ClearCoat": "brdf", "clear_dielectric": "brdf", "opaque_paint": "brdf",
+    "opaque_paint_from_film": "brdf", "metallic_paint": "brdf", "interference_paint": "brdf",
+    "grey_metallic_paint": "brdf", "brdf_table": "brdf", "write_brdf_table": "brdf",
+    "FlakeLayer": "flakes", "FlakeList": "flakes", "TiltDistribution": "flakes", "gaussian_tilt": "flakes",
+    "aluminium_flakes": "flakes", "mica_pigment": "flakes",
+    "multiangle_lab": "multiangle", "flop_index": "multiangle", "FLOP_INDEX_METHODS": "multiangle",
+    "aspecular_directions": "multiangle", "plot_colour_travel": "multiangle",
+    "ASTM_E2194_ASPECULAR_DEG": "multiangle", "ASTM_E2539_ASPECULAR_DEG": "multiangle",
+    "sparkle_graininess": "sparkle",
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        return getattr(importlib.import_module(f"nmmm.appearance.{_LAZY[name]}"), name)
+    raise AttributeError(f"module 'nmmm.appearance' has no attribute {name!r}")
+
+
 __all__ = [
     "delta_e2000",
     "spectra_to_lab",
@@ -23,4 +53,5 @@ __all__ = [
     "white_point",
     "xyz_to_lab",
     "xyz_to_srgb",
+    *_LAZY,
 ]
