@@ -98,10 +98,17 @@ def test_cli_run_and_sweep_and_errors(tmp_path):
     r = runner.invoke(cli.run, [str(p), "-o", str(tmp_path / "out"), "--no-progress"])
     assert r.exit_code == 0, r.output
     assert "L* =" in r.output and (tmp_path / "out" / "report.html").exists()
+    first_line = r.output.splitlines()[0]
+    r = runner.invoke(cli.run, [str(p), "-o", str(tmp_path / "out2"), "--set", "thin_film.layers[1].thickness_nm=60",
+                                "--no-progress"])
+    assert r.exit_code == 0, r.output
+    assert r.output.splitlines()[0] != first_line  # another TiO2 thickness, another colour
+    assert "thickness_nm = 60" in (tmp_path / "out2" / "recipe.toml").read_text()
     r = runner.invoke(cli.sweep, [str(p), "--vary", "thin_film.layers[1].thickness_nm=100,140", "--serial",
                                   "-o", str(tmp_path / "sw"), "--no-progress"])
     assert r.exit_code == 0, r.output
     assert "2 points: 2 computed" in r.output
+    assert (tmp_path / "sw" / "report.html").exists()
     r = runner.invoke(cli.sweep, [str(p), "--vary", "thin_film.layers[1].thickness_nm=100,140", "--serial",
                                   "-o", str(tmp_path / "sw"), "--no-progress"])
     assert "0 computed, 2 already done" in r.output

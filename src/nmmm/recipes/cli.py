@@ -28,8 +28,10 @@ def _recipe_path(value: str) -> str:
 @click.command("run")
 @click.argument("recipe")
 @click.option("-o", "--output", "output", default=None, help="Output folder (default: out-<recipe name>).")
+@click.option("--set", "overrides", multiple=True, metavar="KEY=VALUE",
+              help="Override a recipe key (repeatable), e.g. --set pigment.fraction=0.1.")
 @click.option("--no-progress", is_flag=True, help="Hide progress bars.")
-def run(recipe, output, no_progress):
+def run(recipe, output, overrides, no_progress):
     """Run a TOML RECIPE (a path, or a shipped example's name) into an output folder:
     spectra (CSV, NetCDF), CIELAB colours, plots, images and report.html."""
     from nmmm.recipes.run import run_recipe
@@ -37,7 +39,22 @@ def run(recipe, output, no_progress):
     path = _recipe_path(recipe)
     out = Path(output or f"out-{Path(path).stem}")
     try:
-        res = run_recipe(path, out, progress=not no_progress)
+        if overrides:
+            from nmmm.recipes.run import _dump_toml
+            from nmmm.recipes.schema import read_toml, set_key
+            from nmmm.recipes.sweep import parse_vary
+
+            raw, _, base = read_toml(path)
+            for ov in overrides:
+                key, vals = parse_vary(ov)
+                raw = set_key(raw, key, vals[0] if len(vals) == 1 else vals)
+            if base is not None:  # relative 'file' paths stay relative to the recipe
+                for spec in raw.get("compounds", {}).values():
+                    if isinstance(spec, dict) and "file" in spec and not Path(spec["file"]).is_absolute():
+                        spec["file"] = str(base / spec["file"])
+            res = run_recipe(_dump_toml(raw), out, progress=not no_progress)
+        else:
+            res = run_recipe(path, out, progress=not no_progress)
     except NmmmError as exc:
         raise click.ClickException(str(exc)) from None
     for row in res.colours:

@@ -46,25 +46,25 @@ def compare_results(res_a, res_b, illuminants=None, observer: str = "2") -> list
                      "L_B": float(lb[0]), "a_B": float(lb[1]), "b_B": float(lb[2]),
                      "dE00": float(delta_e2000(la, lb))})
     if res_a.multiangle and res_b.multiangle:
-        ga = [r["aspecular_deg"] for r in res_a.multiangle]
-        gb = [r["aspecular_deg"] for r in res_b.multiangle]
-        for g in ga:
-            if g in gb:
-                ka, kb = f"reflectance factor (aspecular {g:g}°)", f"reflectance factor (aspecular {g:g}°)"
-                for ill in illuminants or res_a.recipe.lighting.illuminants:
-                    la = spectra_to_lab(w, np.interp(w, res_a.wavelength_nm, res_a.spectra[ka]), illuminant=ill, observer=observer)
-                    lb = spectra_to_lab(w, np.interp(w, res_b.wavelength_nm, res_b.spectra[kb]), illuminant=ill, observer=observer)
-                    rows.append({"geometry": f"aspecular {g:g}°", "illuminant": ill,
-                                 "L_A": float(la[0]), "a_A": float(la[1]), "b_A": float(la[2]),
-                                 "L_B": float(lb[0]), "a_B": float(lb[1]), "b_B": float(lb[2]),
-                                 "dE00": float(delta_e2000(la, lb))})
+        # multi-angle CIELAB as each run computed it (first illuminant of each recipe)
+        mb = {(r["aspecular_deg"], r["illuminant"]): r for r in res_b.multiangle}
+        for ra in res_a.multiangle:
+            rb = mb.get((ra["aspecular_deg"], ra["illuminant"]))
+            if rb is None:
+                continue
+            la = np.array([ra["L"], ra["a"], ra["b"]])
+            lb = np.array([rb["L"], rb["a"], rb["b"]])
+            rows.append({"geometry": f"aspecular {ra['aspecular_deg']:g}° (45° illumination)", "illuminant": ra["illuminant"],
+                         "L_A": la[0], "a_A": la[1], "b_A": la[2], "L_B": lb[0], "a_B": lb[1], "b_B": lb[2],
+                         "dE00": float(delta_e2000(la, lb))})
     return rows
 
 
 def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = True) -> dict:
     """Run both recipes into ``out_dir/A`` and ``out_dir/B`` and write ``out_dir/report.html``.
 
-    Returns ``{"rows": [...], "report": path, "a": RunResult, "b": RunResult}``.
+    Returns ``{"rows": [...], "report": path, "a": RunResult, "b": RunResult, "section": dict}``
+    (``section``: the comparison as a report section, for :mod:`nmmm.recipes.demo`).
     """
     import matplotlib
 
@@ -110,4 +110,4 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
                "tables": {"Colour differences (CIELAB in 1, ΔE00 in 1)": rows}, "swatches": swatches}
     report = write_report([summary, result_section(a, f"A: {a.recipe.name}"), result_section(b, f"B: {b.recipe.name}")],
                           out / "report.html", title=f"nmmm compare — {a.recipe.name} vs {b.recipe.name}")
-    return {"rows": rows, "report": str(report), "a": a, "b": b}
+    return {"rows": rows, "report": str(report), "a": a, "b": b, "section": summary}

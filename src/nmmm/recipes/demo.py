@@ -24,7 +24,9 @@ from nmmm.recipes.report import error_section, hook_section, result_section, wri
 
 __all__ = ["run_demo", "RECIPE_SECTIONS", "HOOKS", "HEMATITE_FRACTIONS", "HEMATITE_DIAGONALS_NM"]
 
-RECIPE_SECTIONS = ("gold_ruby_glass", "hematite_paint", "grey_metallic", "interference_pigment")
+RECIPE_SECTIONS = ("gold_ruby_glass", "hematite_paint", "substitution", "grey_metallic", "interference_pigment")
+#: the substitution view of the demo: (recipe A, recipe B) compared by ``nmmm compare``
+SUBSTITUTION = ("hematite_paint", "hematite_paint_ethylcellulose")
 HEMATITE_FRACTIONS = (0.05, 0.07, 0.10)
 HEMATITE_DIAGONALS_NM = (100.0, 150.0, 250.0, 400.0, 600.0, 1000.0)
 
@@ -44,6 +46,18 @@ HOOKS = (
 def _recipe_section(name, out, progress):
     from nmmm.recipes.run import run_recipe
     from nmmm.recipes.schema import example_path
+
+    if name == "substitution":
+        from nmmm.recipes.compare import compare_recipes
+
+        a, b = SUBSTITUTION
+        r = compare_recipes(example_path(a), example_path(b), out / "substitution", illuminants=["D65", "A"],
+                            progress=progress)
+        sec = r["section"]
+        sec["title"] = f"Substitution (nmmm compare): {r['a'].recipe.name} vs {r['b'].recipe.name}"
+        sec["text"] = [f"The binder of the hematite paint substituted: epoxy (A) → ethylcellulose (B), everything else "
+                       f"unchanged — the colour difference seen before anything is made."] + sec["text"]
+        return sec
 
     res = run_recipe(example_path(name), out / name, progress=progress, report=False)
     sec = result_section(res)
@@ -117,7 +131,7 @@ def run_demo(output_dir="nmmm-demo", quick: bool = False, only=None, progress: b
                 skipped.append(title)
                 continue
             sec["elapsed_s"] = time.perf_counter() - t0
-            if kind == "recipe":
+            if kind == "recipe" and not sec["title"].startswith("Substitution"):
                 sec["title"] = f"Recipe: {sec['title']}"
         except Exception as exc:  # noqa: BLE001 - one failing package must not kill the demo
             tb = traceback.format_exc(limit=6)

@@ -231,9 +231,24 @@ def sweep(recipe, varies, out_dir, scheduler=None, n_workers: int = 2, serial: b
     if plots and len(df):
         try:
             summary["plot"] = str(plot_sweep(df, out / "sweep.png"))
+            summary["report"] = str(_sweep_report(df, summary, raw, out))
         except Exception:  # pragma: no cover - a plot must never lose the sweep
             pass
     return summary
+
+
+def _sweep_report(df, summary, raw, out):
+    from nmmm.recipes.report import write_report
+    from nmmm.recipes.run import _dump_toml
+
+    cols = [c for c in df.columns if c.startswith("param:") or c[:2] in ("L_", "a_", "b_")]
+    rows = [{(c[6:] if c.startswith("param:") else c): r[c] for c in cols} for _, r in df.iterrows()]
+    sec = {"title": f"Sweep of {raw.get('name', 'recipe')}: {summary['n_points']} points",
+           "text": [f"{summary['n_computed']} points computed now, {summary['n_skipped']} found on disk; "
+                    f"{summary['wall_s']:.1f} s wall, {summary['physics_s']:.1f} s of physics. CIELAB of the primary "
+                    f"spectrum ({df['primary'].iloc[0]}) under each illuminant; parameters in the recipe's units."],
+           "figures": [summary["plot"]], "tables": {"Points (CIELAB in 1)": rows}, "recipe": _dump_toml(raw)}
+    return write_report([sec], out / "report.html", title=sec["title"])
 
 
 def _varies_list(varies):
