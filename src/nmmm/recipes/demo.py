@@ -24,7 +24,8 @@ from nmmm.recipes.report import error_section, hook_section, result_section, wri
 
 __all__ = ["run_demo", "RECIPE_SECTIONS", "HOOKS", "HEMATITE_FRACTIONS", "HEMATITE_DIAGONALS_NM"]
 
-RECIPE_SECTIONS = ("gold_ruby_glass", "hematite_paint", "substitution", "grey_metallic", "interference_pigment")
+RECIPE_SECTIONS = ("gold_ruby_glass", "hematite_paint", "substitution", "grey_metallic", "interference_pigment",
+                   "hematite_coating_fft")
 #: the substitution view of the demo: (recipe A, recipe B) compared by ``nmmm compare``
 SUBSTITUTION = ("hematite_paint", "hematite_paint_ethylcellulose")
 HEMATITE_FRACTIONS = (0.05, 0.07, 0.10)
