@@ -220,3 +220,13 @@ def test_cli_run(tmp_path):
     t = json.loads(res.output)["tensor"]
     _, harm = laminate_means(2.25, -10 + 1j, 0.5)
     assert complex(*t[0][0]) == pytest.approx(harm, abs=1e-8)
+
+
+def test_apparent_property_for_rve_study():
+    """The RVE hook returns the scalar property of one realisation (laminate: exact means)."""
+    from nmmm.homogenize import apparent_property
+
+    prop = apparent_property({0: 2.0, 1: 4.0}, part="real", component=0)
+    assert prop(G.laminate(8, 0.5, axis=0)) == pytest.approx(1 / (0.5 / 2 + 0.5 / 4))
+    prop = apparent_property({0: 2.0, 1: 4.0})
+    assert prop(G.laminate(8, 0.5, axis=0)) == pytest.approx((3.0 + 1 / (0.5 / 2 + 0.5 / 4)) / 2)

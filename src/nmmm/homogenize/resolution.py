@@ -5,6 +5,14 @@ For a discontinuous permittivity the error of ε_eff is first order in the voxel
 Computing the same microstructure at two or three resolutions and extrapolating
 (Richardson) removes the leading terms.
 
+When it helps, and when not (measured): for Hashin's coated sphere with a metal core the error
+falls from 2.3 % (32³) to 0.4 % extrapolating 24³/32³. It does *not* help where the error is
+not a smooth power series in h: at corner singularities (the checkerboard converges as
+h^a with a < 1 and a rotating complex phase: extrapolation doubled the error) and where the
+rasterised volume fraction jumps between resolutions (staircase noise of a few 0.1 %; use
+nested grids N, 2N). ``ResolutionStudy.error_estimate`` reports the size of the correction:
+treat a correction comparable to the spread of the raw values as a warning sign.
+
 - :func:`richardson` — extrapolate values computed at voxel sizes ``h`` to h -> 0
   (a polynomial in h through the points: linear for two, quadratic for three).
 - :func:`extrapolate_resolution` — run :func:`nmmm.homogenize.fft_permittivity` on a
@@ -35,7 +43,7 @@ def richardson(values, voxel_sizes, order: int | None = None) -> np.ndarray:
     resolutions — the first-order error term — quadratic for three); a smaller ``order`` gives a
     least-squares fit.
 
-    >>> float(richardson([1.1, 1.05], [0.1, 0.05]).real)   # 1 + h
+    >>> round(float(richardson([1.1, 1.05], [0.1, 0.05]).real), 12)   # values 1 + h
     1.0
     """
     v = np.asarray(values, dtype=complex)
