@@ -84,6 +84,9 @@ def test_csv_errors(tmp_path):
     p.write_text("wavelength_nm,angle_deg,psi_deg,delta_deg\n500,70,95,120\n")
     with pytest.raises(InvalidInputError, match=r"psi_deg must lie in \[0, 90\]"):
         read_csv(p)
+    p.write_text("wavelength_nm,angle_deg,psi_deg,delta_deg\n# note\n500,70,30,120\n600,70,-1,120\n")
+    with pytest.raises(InvalidInputError, match=r"data row 3: psi_deg must lie in \[0, 90\].*got -1"):
+        read_csv(p)
     p.write_text("wavelength_nm,angle_deg,psi_deg,delta_deg\n500,70,abc,120\n")
     with pytest.raises(DataFileError, match="row 2"):
         read_csv(p)

@@ -267,6 +267,14 @@ def read_csv(path, name: str | None = None) -> EllipsometryData:
         if np.any(wl <= 0):
             raise DataFileError(f"{path}: photon energies must be > 0 eV")
         wl = HC_EV_NM / wl
+    psi = arr[:, col["psi_deg"]]
+    outside = np.flatnonzero((psi < 0) | (psi > 90))
+    if outside.size:
+        i = int(outside[0])
+        raise InvalidInputError(
+            f"{path}, data row {i + 2}: psi_deg must lie in [0, 90] degrees (tan Psi = |r_p/r_s|), got {psi[i]:g}"
+            f"{f' ({outside.size} rows in all)' if outside.size > 1 else ''}. Psi in radians, or tan(Psi)/cos(Delta) "
+            "data? Convert first.")
     has_sig = "sigma_psi_deg" in col and "sigma_delta_deg" in col
     if ("sigma_psi_deg" in col) != ("sigma_delta_deg" in col):
         given, absent = ("sigma_psi_deg", "sigma_delta_deg") if "sigma_psi_deg" in col else \
