@@ -163,3 +163,10 @@ def test_grey_metallic_stereo_with_discrete_flakes(tmp_path):
     assert left.shape == right.shape == (80, 120, 3)
     assert np.abs(left - right).max() > 0.05  # glints differ between the eyes
     assert any("discrete flakes" in n for n in res.notes)
+    exr = res.files.get("spectral image left eye")
+    if exr is not None:  # spectral EXR written by nmmm.appearance.render, read back here
+        from nmmm.appearance.render import read_spectral_exr
+
+        w, values, rgb, header = read_spectral_exr(exr)
+        np.testing.assert_allclose(w, res.wavelength_nm)
+        assert values.shape == (80, 120, len(w)) and np.all(np.isfinite(values))

@@ -50,6 +50,7 @@ class RunResult:
     notes: list = field(default_factory=list)
     timings_s: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)          # kind -> path (after write_outputs)
+    spectral_images: dict = field(default_factory=dict)  # name -> nmmm.appearance.render.SpectralImage
 
 
 # --------------------------------------------------------------------------------------
@@ -277,7 +278,7 @@ def _effect(recipe, mats, w, res):
         images = None
         if recipe.image.renderer == "auto":
             try:
-                images = _stereo_rendered(recipe, brdf, w)
+                images = _stereo_rendered(recipe, brdf, w, res.spectral_images)
                 res.notes.append(
                     "Images: nmmm.appearance.render — the plate tiled with a "
                     f"{recipe.image.cell_um:g} µm unit cell of discrete flakes (mean diameter "
@@ -297,7 +298,7 @@ def _eye_positions_cm(im):
     return centre
 
 
-def _stereo_rendered(recipe, brdf, w):
+def _stereo_rendered(recipe, brdf, w, keep: dict):
     """Stereo pair by :func:`nmmm.appearance.render.render_stereo_plate` with a tiled cell of
     discrete flakes (the seed paper's plate of unit cells)."""
     from nmmm.appearance.flakes import FlakeList
@@ -320,13 +321,15 @@ def _stereo_rendered(recipe, brdf, w):
         left, right = render_stereo_plate(plate, position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0),
                                           interocular_mm=im.eye_separation_cm * 10.0, fov_deg=im.fov_deg,
                                           resolution=tuple(im.pixels), **kw)
+        keep.update({"left eye": left, "right eye": right})
         return {"left eye": np.asarray(left.to_srgb(im.exposure), float),
                 "right eye": np.asarray(right.to_srgb(im.exposure), float)}
     from nmmm.appearance.render import PinholeCamera
 
     cam = PinholeCamera(position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0), fov_deg=im.fov_deg,
                         resolution=tuple(im.pixels))
-    return {"view": np.asarray(render_plate(plate, cam, **kw).to_srgb(im.exposure), float)}
+    keep["view"] = render_plate(plate, cam, **kw)
+    return {"view": np.asarray(keep["view"].to_srgb(im.exposure), float)}
 
 
 def _stereo(recipe, brdf, w):
@@ -481,6 +484,13 @@ def write_outputs(res: RunResult, out_dir, report: bool = True) -> dict:
             p = out / f"image_{_safe(name)}.png"
             Image.fromarray((np.clip(img, 0, 1) * 255 + 0.5).astype(np.uint8)).save(p)
             files[f"image {name}"] = p
+        for name, simg in res.spectral_images.items():
+            try:  # spectral radiance (Fichet et al. 2021 OpenEXR layout)
+                p = out / f"image_{_safe(name)}.exr"
+                simg.write_exr(p, half=True)
+                files[f"spectral image {name}"] = p
+            except Exception as exc:  # noqa: BLE001 - the PNGs remain
+                res.notes.append(f"Spectral EXR of {name} not written: {exc}")
         if len(res.images) == 2:
             a, b = res.images.values()
             gap = np.ones((a.shape[0], 8, 3))
