@@ -183,6 +183,10 @@ def test_flake_list_bad_input():
         FlakeList(**{**ok, "depth_nm": np.array([1.0, -1.0])})
     with pytest.raises(InvalidInputError, match=">= 0"):
         FlakeList.random(MetalFlakeOptics(1 + 6j), gaussian_tilt(5), -3)
+    with pytest.raises(InvalidInputError, match="mean_diameter_nm must be > 0"):
+        FlakeList.random(MetalFlakeOptics(1 + 6j), gaussian_tilt(5), 3, mean_diameter_nm=-15e3)
+    with pytest.raises(InvalidInputError, match="diameter_cv must be >= 0"):
+        FlakeList.random(MetalFlakeOptics(1 + 6j), gaussian_tilt(5), 3, diameter_cv=-0.3)
 
 
 def test_thin_film_optics_validation():

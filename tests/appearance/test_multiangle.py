@@ -50,6 +50,8 @@ def test_flop_index_formula():
     assert "Alman 1987" in FLOP_INDEX_METHODS
     with pytest.raises(InvalidInputError):
         flop_index(1.0, 2.0, 3.0, method="nope")
+    with pytest.raises(InvalidInputError, match="L\\*15 must be >= 0"):
+        flop_index(-5.0, 50.0, 20.0)
 
 
 def test_white_lambertian_diffuser_has_L_100_at_all_angles():

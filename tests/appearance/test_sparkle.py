@@ -107,3 +107,8 @@ def test_flake_glint_image_radiometry_matches_the_statistical_lobe():
     f = paint(w, wi, d, components="flakes") @ Wy
     expected = np.pi / wo[2] * np.sum(f * d[..., 2] * K) * du * du
     assert img.mean() == pytest.approx(expected, rel=0.1)
+
+
+def test_empty_image_raises():
+    with pytest.raises(InvalidInputError, match="no pixels"):
+        sparkle_graininess(np.zeros((0, 0)), 1.0)

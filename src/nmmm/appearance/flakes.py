@@ -650,6 +650,13 @@ class FlakeList:
         if not (0 <= lo < hi):
             raise InvalidInputError(f"depth_range_nm must be (top, bottom) with 0 <= top < bottom, got {depth_range_nm!r}")
         depth = lo + rng.random(n) * (hi - lo)
+        d_mean = float(check_finite(mean_diameter_nm, "mean_diameter_nm"))
+        if not d_mean > 0:
+            raise InvalidInputError(f"mean_diameter_nm must be > 0 (a flake diameter), got {mean_diameter_nm!r}")
+        diameter_cv = float(check_finite(diameter_cv, "diameter_cv"))
+        if diameter_cv < 0:
+            raise InvalidInputError(
+                f"diameter_cv must be >= 0 (coefficient of variation: std/mean; 0 for equal flakes), got {diameter_cv!r}")
         if diameter_cv > 0:
             s2 = np.log(1 + diameter_cv ** 2)
             dia = rng.lognormal(np.log(mean_diameter_nm) - s2 / 2, np.sqrt(s2), n)

@@ -182,6 +182,9 @@ def flop_index_alman1987(L15, L45, L110):
     L15, L45, L110 = (np.asarray(check_finite(v, n), float) for v, n in ((L15, "L15"), (L45, "L45"), (L110, "L110")))
     if np.any(L45 <= 0):
         raise InvalidInputError("L*45 must be > 0 for the flop index")
+    for v, nm in ((L15, "L*15"), (L110, "L*110")):
+        if np.any(v < 0):
+            raise InvalidInputError(f"{nm} must be >= 0 (CIELAB lightness), got min {v.min()!r}")
     d = L15 - L110
     return 2.69 * np.sign(d) * np.abs(d) ** 1.11 / L45 ** 0.86
 

@@ -63,6 +63,8 @@ def relative_luminance(image, encoding: str = "linear") -> np.ndarray:
     a = np.asarray(image)
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (1, 3, 4)):
         raise InvalidInputError(f"image must be (H, W), (H, W, 3) or (H, W, 4), got shape {a.shape}")
+    if a.shape[0] == 0 or a.shape[1] == 0:
+        raise InvalidInputError(f"image has no pixels (shape {a.shape}); give an image at least 1 x 1")
     if a.dtype.kind in "ui":
         a = a.astype(float) / np.iinfo(a.dtype).max
     a = check_finite(a, "image").astype(float)
