@@ -52,6 +52,18 @@ def test_mix_is_a_material_and_matches_the_formula(gold_silica):
     np.testing.assert_allclose(br.eps(w), bruggeman(ea, es, 0.3), rtol=1e-10)
 
 
+def test_mix_takes_database_keys_and_refuses_disjoint_ranges(gold_silica):
+    w, au, si, ea, es = gold_silica
+    by_key = mix("main/SiO2/Malitson", [("main/Au/Johnson", 0.0005)])
+    np.testing.assert_allclose(by_key.eps(w), maxwell_garnett(ea, es, 0.0005), rtol=1e-12)
+    blue = TabulatedMaterial("blue only", [400.0, 500.0], [1.5, 1.5], [0.0, 0.0])
+    red = TabulatedMaterial("red only", [600.0, 700.0], [2.0, 2.0], [0.1, 0.1])
+    with pytest.raises(OutOfRangeError, match="do not overlap"):
+        mix(blue, [(red, 0.1)])
+    with pytest.raises(OutOfRangeError, match="do not overlap"):
+        mix_tensor(blue, [Inclusion(red, 0.1, Shape.spheroid(2.0, orientation="aligned"))])
+
+
 def test_gold_ruby_plasmon_peak_between_520_and_535_nm(gold_silica):
     """The seed's Figure 1: the absorption band of gold spheres in silica (p = 0.0005)."""
     w, au, si, _, _ = gold_silica

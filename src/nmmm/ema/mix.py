@@ -54,7 +54,8 @@ MIX_METHODS = ("maxwell_garnett", "maxwell_garnett_mie", "bruggeman", "looyenga"
 class Inclusion:
     """A population of inclusions in a host.
 
-    ``material`` a :class:`~nmmm.materials.material.Material` (or a constant complex n + ik),
+    ``material`` a :class:`~nmmm.materials.material.Material` (or a database key such as
+    ``"main/Au/Johnson"``, or a constant complex n + ik),
     ``fraction`` its volume fraction in [0, 1] of the mixture, ``shape`` a
     :class:`~nmmm.ema.shapes.Shape` (default sphere), ``radius_nm`` the radius of a sphere of
     the same volume (optional; needed by "maxwell_garnett_mie", used for size warnings).
@@ -66,7 +67,7 @@ class Inclusion:
     radius_nm: float | None = None
 
     def __post_init__(self):
-        object.__setattr__(self, "material", as_material(self.material))
+        object.__setattr__(self, "material", _material(self.material))
         object.__setattr__(self, "fraction", float(check_fraction(self.fraction)))
         if not isinstance(self.shape, Shape):
             raise InvalidInputError(f"shape must be an nmmm.ema.Shape, got {self.shape!r}")
@@ -127,12 +128,21 @@ def _eps_function(host, incs, method, orientation):
     return eps
 
 
+def _material(value) -> Material:
+    """A Material from a Material, a database key ('main/Au/Johnson') or a constant n + ik."""
+    if isinstance(value, str):
+        from nmmm.materials.database import get
+
+        return get(value)
+    return as_material(value)
+
+
 def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = None) -> DerivedMaterial:
     """The effective medium of ``inclusions`` in ``host`` as a Material (isotropic).
 
     Parameters
     ----------
-    host : Material or complex n + ik
+    host : Material, database key (e.g. "main/SiO2/Malitson") or complex n + ik
     inclusions : Inclusion, or a sequence of Inclusion / tuples (material, fraction[, shape[, radius_nm]])
         Fractions are of the whole mixture; the host fills 1 − Σ fractions.
     method : {"maxwell_garnett", "maxwell_garnett_mie", "bruggeman", "looyenga"}
@@ -146,7 +156,7 @@ def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = No
     -------
     DerivedMaterial — ``.eps(wavelength_nm)``, ``.nk(...)``, usable wherever a Material is.
     """
-    host = as_material(host)
+    host = _material(host)
     incs = _as_inclusions(inclusions)
     method = canonical_method(method)
     if method not in MIX_METHODS:
@@ -162,7 +172,7 @@ def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = No
         if method == "maxwell_garnett_mie" and inc.radius_nm is None:
             raise InvalidInputError("method 'maxwell_garnett_mie' needs Inclusion(..., radius_nm=...)")
     desc = _describe(host, incs, method)
-    return DerivedMaterial(
+    result = DerivedMaterial(
         name=name or desc,
         eps_function=_eps_function(host, incs, method, "random"),
         components=(host, *[inc.material for inc in incs]),
@@ -171,13 +181,15 @@ def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = No
                   "inclusions": [{"material": inc.material.name, "fraction": inc.fraction,
                                   "shape": inc.shape.name, "radius_nm": inc.radius_nm} for inc in incs]},
     )
+    result.range_nm  # noqa: B018 - components whose ranges do not overlap: OutOfRangeError now, not at first use
+    return result
 
 
 def mix_tensor(host, inclusions, name: str | None = None) -> tuple[DerivedMaterial, DerivedMaterial, DerivedMaterial]:
     """Aligned inclusions (Maxwell Garnett): the principal permittivities as three Materials
     (along the inclusions' axes 1, 2, 3 — for spheroids, 3 is the symmetry axis, so the
     first and third are the ordinary and extraordinary media of a uniaxial layer)."""
-    host = as_material(host)
+    host = _material(host)
     incs = _as_inclusions(inclusions)
     f = _eps_function(host, incs, "maxwell_garnett", "aligned")
     base = name or _describe(host, incs, "maxwell_garnett (aligned)")
@@ -190,6 +202,7 @@ def mix_tensor(host, inclusions, name: str | None = None) -> tuple[DerivedMateri
             reference=f"nmmm.ema.mix_tensor — {base}, principal axis {axis + 1}",
             metadata={"method": "maxwell_garnett", "orientation": "aligned", "axis": axis + 1},
         ))
+    out[0].range_nm  # noqa: B018 - disjoint component ranges: OutOfRangeError now
     return tuple(out)
 
 
