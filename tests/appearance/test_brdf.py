@@ -8,6 +8,8 @@ integrals computed here by brute-force quadrature over outgoing directions (the 
 own albedo tables use a different parameterisation, over flake normals).
 """
 
+import functools
+
 import numpy as np
 import pytest
 import tmm
@@ -35,16 +37,25 @@ def _dir(theta_deg, phi_deg=0.0):
     return np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
 
 
-def hemispherical_albedo(brdf, wi, n_theta=160, n_phi=160, w=W):
-    """∫ f cos θo dωo by Gauss–Legendre in θo and midpoint in φo, plus the Dirac."""
+@functools.lru_cache(maxsize=4)
+def _hemisphere_rule(n_theta, n_phi):
+    """Outgoing directions and cos-weighted solid-angle weights: Gauss–Legendre in θo,
+    midpoint in φo (cached: the Golub–Welsch eigenproblem cost more than the BRDF)."""
     x, wx = np.polynomial.legendre.leggauss(n_theta)
     th = 0.25 * np.pi * (x + 1)
     wt = 0.25 * np.pi * wx
     ph = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
     T, P = np.meshgrid(th, ph, indexing="ij")
     d = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
-    f = brdf(w, wi, d)
     wgt = (wt * np.sin(th) * np.cos(th))[:, None] * (2 * np.pi / n_phi)
+    d.flags.writeable = wgt.flags.writeable = False
+    return d, wgt
+
+
+def hemispherical_albedo(brdf, wi, n_theta=160, n_phi=160, w=W):
+    """∫ f cos θo dωo by Gauss–Legendre in θo and midpoint in φo, plus the Dirac."""
+    d, wgt = _hemisphere_rule(n_theta, n_phi)
+    f = brdf(w, wi, d)
     return np.einsum("ij,ijl->l", wgt, f) + brdf.specular_reflectance(w, wi)
 
 
