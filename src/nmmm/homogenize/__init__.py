@@ -11,6 +11,28 @@ Public API
 - Solvers: :data:`SOLVERS` (COCG default; BiCGStab, GMRES fallbacks; Eyre-Milton reference).
 - Validity: :func:`check_periodicity`, :func:`periodize_mirror`, :func:`check_quasistatic`,
   :func:`size_parameter`, :class:`QuasiStaticWarning`.
+- Reference cells with exact answers: :mod:`nmmm.homogenize.geometries`.
+- Demo hook: :func:`nmmm.homogenize.examples.demo` (hematite coating at 5/7/10 %).
+- CLI: ``nmmm homogenize run CELL --eps 0=2.25 --eps 1=-50+20j``, ``nmmm homogenize demo DIR``.
+
+Method in one paragraph: the Galerkin (projection) form of the periodic Lippmann-Schwinger
+equation, Γ ε x = −Γ ε E0, is complex symmetric and solved by COCG without a reference
+medium (robust for metals, ε ≈ −50 + 20i next to 2.25); BiCGStab and GMRES are fallbacks,
+Eyre-Milton and Moulinec-Suquet are kept as references. Γ is stored as per-axis 1-D symbol
+factors (spectral, Willot 2014 finite-difference, Willot 2015 rotated — the default) and
+evaluated on the fly in fused Numba kernels; FFTs are scipy.fft in place with 2 workers,
+complex128 or complex64.
+
+Known limitations
+-----------------
+- Errors are first order in the voxel size for smooth inclusions (2-3 % at 32³ for a
+  metal-core coated sphere); :func:`extrapolate_resolution` helps there, not at corner
+  singularities. The metal-dielectric checkerboard has no converging answer on any grid.
+- The rotated (default) operator connects voxels that touch only at a corner; for
+  contact-dominated cells compare with ``green="willot2014"``.
+- Quasi-static only: features must be small against λ/n (a warning says when not).
+- No GPU backend yet (the kernels are NumPy/Numba; a CuPy port would replace scipy.fft and
+  the four kernels).
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
