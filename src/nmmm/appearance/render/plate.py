@@ -369,6 +369,10 @@ if _nb is not None:
         maxang = cut * sigma
         cosmax = math.cos(maxang)
         half_diag = 0.5 * math.sqrt(cw * cw + ch * ch)
+        # a flake normal m off the half vector h' by δ sends the external mirror ray at
+        # least 2 n cos θd' δ >= 2 sqrt(n² - 1) δ away (reflection + Snell, θd' below the
+        # critical angle): search normals within maxang / (2 sqrt(n² - 1)), +10 %
+        mfac = min(2.0, 1.1 / (2 * math.sqrt(max(n * n - 1, 1e-6))))
         for jj in _nb.prange(j1 - j0):
             j = j0 + jj
             cnt = 0
@@ -427,7 +431,7 @@ if _nb is not None:
                     hxv = hxc
                     hyv = hyc
                     # search radius in the flake-normal (m_x, m_y) plane
-                    r = 0.75 * maxang + half_diag / dc + half_diag / dl
+                    r = mfac * maxang + half_diag / dc + half_diag / dl
                     bx0 = int(math.floor((hxv - r + 1) * 0.5 * G))
                     bx1 = int(math.floor((hxv + r + 1) * 0.5 * G))
                     by0 = int(math.floor((hyv - r + 1) * 0.5 * G))
@@ -448,15 +452,6 @@ if _nb is not None:
                                 dx = px - cam[0]
                                 dy = py - cam[1]
                                 dz = -cam[2]
-                                zc = dx * cam_f[0] + dy * cam_f[1] + dz * cam_f[2]
-                                if zc <= 0:
-                                    continue
-                                u = (dx * cam_r[0] + dy * cam_r[1] + dz * cam_r[2]) / (zc * tx) - sx
-                                v = (dx * cam_u[0] + dy * cam_u[1] + dz * cam_u[2]) / (zc * ty) - sy
-                                col = int(math.floor((u + 1) * 0.5 * W))
-                                row = int(math.floor((1 - v) * 0.5 * H))
-                                if col < 0 or col >= W or row < 0 or row >= H:
-                                    continue
                                 d = math.sqrt(dx * dx + dy * dy + dz * dz)
                                 wox = -dx / d
                                 woy = -dy / d
@@ -497,6 +492,15 @@ if _nb is not None:
                                 fz = math.sqrt(1 - s2)
                                 ca = fx * wox + fy * woy + fz * woz
                                 if ca < cosmax:
+                                    continue
+                                zc = dx * cam_f[0] + dy * cam_f[1] + dz * cam_f[2]
+                                if zc <= 0:
+                                    continue
+                                u = (dx * cam_r[0] + dy * cam_r[1] + dz * cam_r[2]) / (zc * tx) - sx
+                                v = (dx * cam_u[0] + dy * cam_u[1] + dz * cam_u[2]) / (zc * ty) - sy
+                                col = int(math.floor((u + 1) * 0.5 * W))
+                                row = int(math.floor((1 - v) * 0.5 * H))
+                                if col < 0 or col >= W or row < 0 or row >= H:
                                     continue
                                 ang = math.acos(min(1.0, ca))
                                 g = gnorm * math.exp(-ang * ang * inv2s2)
@@ -764,7 +768,8 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
         top, bottom = fl.layer_depth_nm
         fzeta = np.clip((fl.depth_nm - top) / max(bottom - top, 1e-9), 0.0, 1.0)
     cut = 3.0
-    G = int(np.clip(4.0 / (0.75 * cut * sigma), 4, 512))
+    mfac = min(2.0, 1.1 / (2 * math.sqrt(max(n * n - 1, 1e-6))))
+    G = int(np.clip(4.0 / (mfac * cut * sigma), 4, 512))
     bx = np.clip(((fnrm[:, 0] + 1) * 0.5 * G).astype(np.int64), 0, G - 1)
     by = np.clip(((fnrm[:, 1] + 1) * 0.5 * G).astype(np.int64), 0, G - 1)
     key = by * G + bx
