@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy import stats
+from scipy import optimize, special, stats
 
 from nmmm.errors import InvalidInputError
 from nmmm.experiment.stats import (
@@ -153,6 +153,18 @@ def test_beta_binomial_recovers_parameters_and_binomial_limit():
     assert est.pc == pytest.approx(0.6, abs=0.02)
     assert est.rho == pytest.approx(0.1, abs=0.04)
     assert est.interval[0] < est.pc < est.interval[1]
+    # the maximum-likelihood point itself, against scipy.stats.betabinom maximised directly
+    # (a = mu (1 - rho) / rho, b = (1 - mu) (1 - rho) / rho; Nelder-Mead in logit space)
+
+    def nll(x):
+        mu, rho = special.expit(x)
+        return -stats.betabinom.logpmf(k, n, mu * (1 - rho) / rho, (1 - mu) * (1 - rho) / rho).sum()
+
+    ref = optimize.minimize(nll, [0.0, -2.0], method="Nelder-Mead", options={"xatol": 1e-8, "fatol": 1e-10})
+    mu_ref, rho_ref = special.expit(ref.x)
+    assert est.pc == pytest.approx(mu_ref, abs=1e-4)
+    assert est.rho == pytest.approx(rho_ref, abs=1e-3)
+    assert est.extra["loglik"] == pytest.approx(-ref.fun, abs=1e-6)
     # no overdispersion at all: every observer 12/20 -> rho at its lower bound, mu = 0.6 exactly
     flat = pooled_beta_binomial(np.full(10, 12), np.full(10, 20))
     assert flat.pc == pytest.approx(0.6, abs=1e-5)
