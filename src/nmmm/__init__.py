@@ -21,6 +21,18 @@ from nmmm.errors import (
 
 __version__ = "0.1.0"
 
+_SUBPACKAGES = ("materials", "ellipsometry", "ema", "microstructure", "homogenize", "layers",
+                "appearance", "experiment", "recipes", "spectra", "errors")
+
+
+def __getattr__(name):
+    """Import a sub-package on first access, so ``import nmmm; nmmm.materials.get(...)`` works."""
+    if name in _SUBPACKAGES:
+        import importlib
+
+        return importlib.import_module(f"nmmm.{name}")
+    raise AttributeError(f"module 'nmmm' has no attribute {name!r}")
+
 __all__ = [
     "ConvergenceError",
     "DataFileError",

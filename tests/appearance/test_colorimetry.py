@@ -75,3 +75,14 @@ def test_bad_inputs():
         xyz_to_srgb([np.nan, 20.0, 30.0])
     with pytest.raises(nmmm.InvalidInputError, match="Y > 0"):
         xyz_to_srgb([10.0, 20.0, 30.0], white_xyz=[0.0, 0.0, 0.0])
+
+
+def test_truncated_grid_warns():
+    w = np.arange(500, 511, 1.0)
+    with pytest.warns(UserWarning, match="truncated"):
+        spectra_to_lab(w, np.ones_like(w))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        spectra_to_lab(np.arange(400, 701, 5.0), np.ones(61))

@@ -103,11 +103,31 @@ def _weights_cached(w_bytes, w_shape, ill_key, obs_key, illuminant, observer):
     return W
 
 
+#: least fraction of each colour-matching function's integral a grid must cover before
+#: :func:`weighting_factors` warns that colours come from a truncated spectrum
+#: (400–700 nm covers ≥ 99.5 % of x̄, ȳ, z̄; 420–680 nm only 95 % of z̄).
+MIN_CMF_COVERAGE = 0.99
+
+
+def _warn_if_truncated(w, observer):
+    import warnings
+
+    cmfs = _observer(observer)
+    inside = (cmfs.wavelengths >= w.min()) & (cmfs.wavelengths <= w.max())
+    coverage = cmfs.values[inside].sum(axis=0) / cmfs.values.sum(axis=0)
+    if np.any(coverage < MIN_CMF_COVERAGE):
+        warnings.warn(
+            f"the wavelength grid {w.min():g}–{w.max():g} nm covers only "
+            f"{100 * coverage.min():.1f} % of a colour-matching function: colours are computed from a "
+            "truncated spectrum (use at least 400–700 nm, ideally 380–780 nm)", UserWarning, stacklevel=3)
+
+
 def weighting_factors(wavelength_nm, illuminant="D65", observer="2") -> np.ndarray:
     """Weights W (N, 3) such that XYZ = values @ W, the perfect white giving Y = 100."""
     w = as_wavelength_nm(wavelength_nm)
     if w.ndim != 1 or w.size < 2 or np.any(np.diff(w) <= 0):
         raise InvalidInputError("wavelength_nm must be a 1-D increasing grid of at least 2 points")
+    _warn_if_truncated(w, observer)
     if isinstance(illuminant, np.ndarray) or not isinstance(illuminant, str):
         return _weights_cached.__wrapped__(w.tobytes(), w.shape, None, None, illuminant, observer)
     return _weights_cached(w.tobytes(), w.shape, _key(illuminant), _key(observer), illuminant, observer)
