@@ -39,3 +39,20 @@ def test_demo_hook(tmp_path):
     assert all((tmp_path / f.split("/")[-1]).exists() for f in r["figures"])
     assert r["tables"]["render"]["shared_glint_fraction"] < 0.3
     assert np.isfinite(r["tables"]["render"]["seconds"])
+
+
+@pytest.mark.slow
+def test_cli_object_with_mitsuba(tmp_path):
+    try:
+        from nmmm.appearance.render.mitsuba_paint import require_mitsuba
+
+        require_mitsuba()
+    except Exception as exc:  # noqa: BLE001
+        pytest.skip(f"Mitsuba unavailable: {exc}")
+    res = CliRunner().invoke(render, ["object", str(tmp_path / "o"), "--width", "24", "--height", "24", "--spp", "4",
+                                      "--shape", "sphere"])
+    assert res.exit_code == 0, res.output
+    from nmmm.appearance.render import read_spectral_exr
+
+    w, v, rgb, hdr = read_spectral_exr(tmp_path / "o.exr")
+    assert w.size == 81 and v.shape == (24, 24, 81) and hdr["spectralLayoutVersion"] == "1.0"
