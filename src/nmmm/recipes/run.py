@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from nmmm.errors import NmmmError, RecipeError
-from nmmm.recipes.schema import Recipe, load_recipe, read_toml, parse_recipe
+from nmmm.recipes.schema import Recipe, parse_recipe, read_toml
 
 __all__ = ["RunResult", "compute", "run_recipe", "build_materials", "scalar_results", "write_outputs"]
 

@@ -201,8 +201,10 @@ def sweep(recipe, varies, out_dir, scheduler=None, n_workers: int = 2, serial: b
                 if scheduler:
                     client = own_client = Client(scheduler)
                 else:
+                    import logging
+
                     own_cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                               dashboard_address=None)
+                                               dashboard_address=None, silence_logs=logging.ERROR)
                     client = own_client = Client(own_cluster)
             futs = {}
             for i, pid, p in todo:
