@@ -5,7 +5,8 @@ Public functions
 ----------------
 - :func:`scene_dict` — a Mitsuba scene dictionary (lengths in mm) with the paint as
   ``nmmm_paint``, nmmm lights (directional → ``directional``, point → ``point``, uniform
-  sky → ``constant`` with a spectral radiance) and one or two perspective sensors whose
+  sky → ``constant`` with a spectral radiance, an (H, W, L) lat-long spectral map →
+  ``nmmm_envmap``) and one or two perspective sensors whose
   ``specfilm`` has one box-shaped band per wavelength.
 - :func:`render_object` — render a sphere / curved panel / flat plate: a list of
   :class:`~nmmm.appearance.render.plate.SpectralImage` (one per eye), so ``write_exr``
@@ -144,9 +145,16 @@ def scene_dict(brdf, shape: str = "sphere", lights=(), environment=None, positio
         else:
             raise InvalidInputError(f"unsupported light {type(lt).__name__}")
     if environment is not None:
-        if not isinstance(environment, UniformEnvironment):
-            raise InvalidInputError("environment must be a UniformEnvironment")
-        d["environment"] = {"type": "constant", "radiance": _spectrum(environment.spectrum, environment.radiance)}
+        if isinstance(environment, UniformEnvironment):
+            d["environment"] = {"type": "constant", "radiance": _spectrum(environment.spectrum, environment.radiance)}
+        elif isinstance(environment, np.ndarray) and environment.ndim == 3:
+            from nmmm.appearance.render.mitsuba_envmap import envmap_emitter, register_nmmm_envmap
+
+            register_nmmm_envmap(mi)
+            d["environment"] = envmap_emitter(environment, w)
+        else:
+            raise InvalidInputError("environment must be a UniformEnvironment or an (H, W, L) lat-long spectral "
+                                    "radiance map on the wavelength grid (see mitsuba_envmap.latlong_environment)")
     if not lights and environment is None:
         raise InvalidInputError("no light: give at least one light or an environment")
     sensors, dl = _sensors(mi, position_mm, look_at_mm, up, fov_deg, resolution, spp, w, stereo, interocular_mm)
@@ -193,8 +201,13 @@ def render_object(brdf, shape: str = "sphere", lights=(), environment=None, dist
     for lt in lights:
         _, s = _light_at(lt, np.zeros((1, 3)))
         white += s[0] * lt.spectral(w) / np.pi
-    if environment is not None:
+    if isinstance(environment, UniformEnvironment):
         white += environment.spectral(w)
+    elif environment is not None:  # lat-long map: radiance of a white diffuser facing +z
+        env = np.asarray(environment, float)
+        th = (np.arange(env.shape[0]) + 0.5) / env.shape[0] * np.pi
+        wt = np.where(th < np.pi / 2, np.cos(th) * np.sin(th), 0.0) * (np.pi / env.shape[0])
+        white += 2 * np.einsum("h,hl->l", wt, env.mean(axis=1))
     out = []
     for k in range(ns):
         img = np.asarray(mi.render(scene, sensor=k, seed=int(seed) + 1000 * k), dtype=np.float32)
