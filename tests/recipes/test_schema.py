@@ -42,6 +42,8 @@ def _err(raw) -> str:
         ("spectral.stop_nm", 300.0, "spectral: stop_nm (300) must exceed start_nm"),
         ("spectral.start_nm", 200.0, "spectral: colours need a grid inside 360–830 nm"),
         ("pigment.size_spread", 0.5, "pigment.size_spread"),
+        ("pigment.diameter_nm", 200.0, "pigment: a cube pigment is sized by edge_nm or body_diagonal_nm; got"),
+        ("pigment.shape", "rod", "pigment: a rod pigment is sized by diameter_nm + length_nm"),
     ],
 )
 def test_invalid_values_name_the_key(key, value, expected):

@@ -215,6 +215,15 @@ class Level(_Strict):
         return self
 
 
+#: the size keys that define each pigment shape (one set per alternative)
+PIGMENT_SIZE_KEYS = {
+    "sphere": ({"diameter_nm"},),
+    "cube": ({"edge_nm"}, {"body_diagonal_nm"}),
+    "rod": ({"length_nm", "diameter_nm"},),
+    "spheroid": ({"polar_diameter_nm", "equatorial_diameter_nm"},),
+}
+
+
 class Pigment(_Strict):
     """Pigment particles of the paint film (equivalent spheres for Mie)."""
 
@@ -239,6 +248,12 @@ class Pigment(_Strict):
     @model_validator(mode="after")
     def _size(self):
         from nmmm.layers.distributions import equivalent_sphere_diameter
+
+        given = set(self.dims())
+        allowed = PIGMENT_SIZE_KEYS[self.shape]
+        if given not in allowed:
+            want = " or ".join(" + ".join(sorted(a)) for a in allowed)
+            raise ValueError(f"a {self.shape} pigment is sized by {want}; got {sorted(given) or 'no size'}")
 
         try:
             equivalent_sphere_diameter(self.shape, self.equivalent_sphere, **self.dims())
