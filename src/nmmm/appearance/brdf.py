@@ -846,6 +846,20 @@ except ImportError:  # pragma: no cover
     _nb = None
 
 
+def _table_pos_py(c, step, n_nodes):
+    """Node index and fraction of the angle arccos(c) (c clipped to [0, 1]) on a table of
+    ``n_nodes`` nodes ``step`` degrees apart (the last interval is closed)."""
+    x = min(np.arccos(min(max(c, 0.0), 1.0)) * (180.0 / np.pi) / step, n_nodes - 1.000001)
+    i = int(x)
+    return i, x - i
+
+
+if _nb is not None:
+    _table_pos = _nb.njit(inline="always", fastmath=True, cache=True)(_table_pos_py)
+else:  # pragma: no cover
+    _table_pos = _table_pos_py
+
+
 def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kb, Dms, Kms,
                do_spec, do_flakes, do_base, do_ms, tau_e_const):
     P = wi.shape[0]
@@ -853,7 +867,6 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
     NT = Fs.shape[0]
     NA = Dms.shape[0]
     ND = den.shape[0]
-    r2d = 180.0 / np.pi
     inv_n2 = 1.0 / (n * n)
     for p in _prange(P):
         ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
@@ -863,18 +876,10 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
                 out[p, l] = 0.0
             continue
         # external angles -> table positions
-        xi = min(np.arccos(min(iz, 1.0)) * r2d / step, NT - 1.000001)
-        i0 = int(xi)
-        fi = xi - i0
-        xo = min(np.arccos(min(oz, 1.0)) * r2d / step, NT - 1.000001)
-        o0 = int(xo)
-        fo = xo - o0
-        xai = min(np.arccos(min(iz, 1.0)) * r2d / astep, NA - 1.000001)
-        ai0 = int(xai)
-        fai = xai - ai0
-        xao = min(np.arccos(min(oz, 1.0)) * r2d / astep, NA - 1.000001)
-        ao0 = int(xao)
-        fao = xao - ao0
+        i0, fi = _table_pos(iz, step, NT)
+        o0, fo = _table_pos(oz, step, NT)
+        ai0, fai = _table_pos(iz, astep, NA)
+        ao0, fao = _table_pos(oz, astep, NA)
         # coat specular lobe (GGX)
         spec_w = 0.0
         d0 = 0
@@ -893,9 +898,7 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
             to2 = (1.0 - oz * oz) / (oz * oz)
             G = 4.0 / ((1.0 + np.sqrt(1.0 + a2 * ti2)) * (1.0 + np.sqrt(1.0 + a2 * to2)))
             spec_w = D * G / (4.0 * iz * oz)
-            xd = min(np.arccos(min(max(cd, 0.0), 1.0)) * r2d / step, NT - 1.000001)
-            d0 = int(xd)
-            fd = xd - d0
+            d0, fd = _table_pos(cd, step, NT)
         # internal directions (Snell)
         ipx, ipy = ix / n, iy / n
         ipz = np.sqrt(max(1.0 - ipx * ipx - ipy * ipy, 0.0))
@@ -906,13 +909,9 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
         c0 = 0
         fc = 0.0
         if tau > 0.0:
-            xa = min(np.arccos(min(ipz, 1.0)) * r2d / step, NT - 1.000001)
-            k0 = int(xa)
-            fa = xa - k0
+            k0, fa = _table_pos(ipz, step, NT)
             a_i = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
-            xa = min(np.arccos(min(opz, 1.0)) * r2d / step, NT - 1.000001)
-            k0 = int(xa)
-            fa = xa - k0
+            k0, fa = _table_pos(opz, step, NT)
             a_o = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
             S = a_i / ipz + a_o / opz
             if do_flakes:
@@ -920,14 +919,10 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
                 hn = np.sqrt(hx * hx + hy * hy + hz * hz)
                 hz /= hn
                 cdl = (ipx * hx + ipy * hy) / hn + ipz * hz
-                xt = min(np.arccos(min(hz, 1.0)) * r2d / dstep, ND - 1.000001)
-                t0 = int(xt)
-                ft = xt - t0
+                t0, ft = _table_pos(hz, dstep, ND)
                 pdf = den[t0] * (1.0 - ft) + den[t0 + 1] * ft
                 g = tau * pdf / (4.0 * ipz * opz)
-                xc = min(np.arccos(min(max(cdl, 0.0), 1.0)) * r2d / step, NT - 1.000001)
-                c0 = int(xc)
-                fc = xc - c0
+                c0, fc = _table_pos(cdl, step, NT)
         # flakes that block no light (tau_e = const over wavelength): one exp per pair
         x0 = tau_e[0] * S
         e0 = np.exp(-x0)
