@@ -24,6 +24,7 @@ def test_unsupported_variant_is_a_clear_error():
         require_mitsuba("llvm_ad_rgb")
 
 
+@pytest.mark.slow
 def test_paint_table_reproduces_brdf():
     """The tabulated + compressed BRDF vs direct evaluation at off-grid directions."""
     from nmmm.appearance.brdf import opaque_paint
@@ -51,7 +52,6 @@ def test_paint_table_reproduces_brdf():
     np.testing.assert_allclose(f_tab.mean(axis=1), f.mean(axis=1), rtol=0.06)
 
 
-@pytest.mark.slow
 def test_mitsuba_plate_matches_plate_renderer():
     _mitsuba()
     from nmmm.appearance.brdf import opaque_paint
@@ -116,3 +116,18 @@ def test_nmmm_envmap_irradiance_matches_analytic():
                   "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}}}})
     img = np.asarray(mi.render(scene))
     assert abs(img[..., 1].mean() - 0.75) < 0.01
+
+
+def test_missing_mitsuba_or_llvm_says_what_to_install(monkeypatch):
+    import sys
+
+    from nmmm.appearance.render import mitsuba_paint
+
+    monkeypatch.setitem(sys.modules, "mitsuba", None)
+    with pytest.raises(mitsuba_paint.MitsubaUnavailableError, match=r"pip install 'nmmm\[mitsuba\]'"):
+        mitsuba_paint.require_mitsuba()
+    monkeypatch.undo()
+    pytest.importorskip("mitsuba")
+    monkeypatch.setattr(mitsuba_paint, "_llvm_versions", lambda: [(15, "/usr/lib/libLLVM-15.so.1")])
+    with pytest.raises(mitsuba_paint.MitsubaUnavailableError, match="libllvm19"):
+        mitsuba_paint.require_mitsuba("llvm_ad_spectral")

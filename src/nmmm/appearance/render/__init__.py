@@ -4,7 +4,15 @@
 - :mod:`~nmmm.appearance.render.camera` — pinhole cameras, stereo pairs.
 - :mod:`~nmmm.appearance.render.plate` — NumPy/Numba plate renderer with discrete flakes.
 - :mod:`~nmmm.appearance.render.exr` — spectral OpenEXR (Fichet et al. 2021 layout).
-- :mod:`~nmmm.appearance.render.mitsuba_paint` — Mitsuba 3 plugins (optional extra).
+- :mod:`~nmmm.appearance.render.mitsuba_paint` — the ``nmmm_paint`` Mitsuba 3 BSDF (optional
+  extra ``nmmm[mitsuba]``; the LLVM variant needs a system libLLVM >= 17).
+- :mod:`~nmmm.appearance.render.mitsuba_envmap` — ``nmmm_envmap``, a spectral lat-long sky.
+- :mod:`~nmmm.appearance.render.mitsuba_scene` — painted sphere / panel / plate scenes, stereo.
+- :mod:`~nmmm.appearance.render.examples` — ``demo(output_dir)``.
+- ``nmmm render plate|object`` — :mod:`~nmmm.appearance.render.cli`.
+
+The Mitsuba modules are imported on demand (``from nmmm.appearance.render.mitsuba_scene
+import render_object``) so that nmmm works without Mitsuba.
 """
 
 from nmmm.appearance.render.camera import PinholeCamera, stereo_pair
