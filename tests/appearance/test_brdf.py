@@ -141,8 +141,8 @@ def test_no_flakes_no_pigment_is_a_clear_dielectric():
 def test_dispersive_coat_follows_its_index():
     from nmmm.materials.models import Cauchy
 
-    b = PaintBRDF(ClearCoat(Cauchy(A=1.5, B=4000.0)), 0.0, None)
-    n = 1.5 + 4000.0 / W ** 2  # Cauchy's n(λ) = A + B/λ², λ in nm
+    b = PaintBRDF(ClearCoat(Cauchy(A=1.5, B=0.004)), 0.0, None)  # B in µm²
+    n = 1.5 + 4000.0 / W ** 2  # Cauchy's n(λ) = A + B/λ², here with λ in nm (B = 4000 nm²)
     R = b.specular_reflectance(W, _dir(0.0))
     assert np.allclose(R, ((n - 1) / (n + 1)) ** 2, atol=1e-6)
 
