@@ -75,18 +75,23 @@ def test_solid_paint_flop_near_zero():
     assert np.ptp(c.L[1:]) < 3.0  # lightness almost independent of angle (15°..110°)
 
 
-def test_metallic_paint_has_a_large_flop_and_interference_paint_travels():
+@pytest.fixture(scope="module")
+def interference_colour():
+    """The default interference paint's multi-angle colour (its tables cost ~1 s; shared)."""
+    return multiangle_lab(interference_paint(), W)
+
+
+def test_metallic_paint_has_a_large_flop_and_interference_paint_travels(interference_colour):
     cm = multiangle_lab(metallic_paint(tilt=7.0, body_reflectance=0.1), W)
     assert cm.flop_index() > 5.0
-    ci = multiangle_lab(interference_paint(), W)
+    ci = interference_colour
     assert np.ptp(ci.hue_deg[1:]) > 20.0  # hue changes with angle: colour travel
     assert ci.lightness_at(15) > ci.lightness_at(110)
     with pytest.raises(InvalidInputError, match="not measured"):
         ci.lightness_at(33)
 
 
-def test_colour_travel_plot(tmp_path):
-    ci = multiangle_lab(interference_paint(), W)
+def test_colour_travel_plot(tmp_path, interference_colour):
     p = tmp_path / "travel.png"
-    plot_colour_travel([ci, multiangle_lab(metallic_paint(), W)], p)
+    plot_colour_travel([interference_colour, multiangle_lab(metallic_paint(), W)], p)
     assert p.stat().st_size > 10_000
