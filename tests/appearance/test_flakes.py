@@ -70,6 +70,11 @@ def test_non_normalisable_tilt_raises(bad):
         TiltDistribution.tabulated(np.linspace(0, 90, 5), bad)
 
 
+def test_tilt_from_zero_normals_raises():
+    with pytest.raises(InvalidInputError, match="zero vector"):
+        TiltDistribution.from_normals(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]]))
+
+
 def test_zero_width_gaussian_raises():
     with pytest.raises(InvalidInputError, match="normalisable"):
         gaussian_tilt(0.0)

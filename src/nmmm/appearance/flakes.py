@@ -351,7 +351,12 @@ class TiltDistribution:
         nrm = check_finite(normals, "normals").astype(float).reshape(-1, 3)
         if nrm.shape[0] < 2:
             raise InvalidInputError("need at least two flake normals to estimate a tilt distribution")
-        th_k = np.arccos(np.clip(np.abs(nrm[:, 2]) / np.linalg.norm(nrm, axis=1), -1, 1))
+        length = np.linalg.norm(nrm, axis=1)
+        if np.any(length == 0):
+            raise InvalidInputError(
+                f"normals has {int(np.sum(length == 0))} zero vector(s) (first at row {int(np.argmin(length))}); "
+                "a flake normal needs a direction")
+        th_k = np.arccos(np.clip(np.abs(nrm[:, 2]) / length, -1, 1))
         if bandwidth_deg is None:
             sig = np.sqrt(np.mean(th_k ** 2) / 2)  # per-axis spread of the tilt vectors
             h = max(sig * th_k.size ** (-1 / 6), np.radians(0.05))
