@@ -60,6 +60,8 @@ def test_white_lambertian_plate_is_srgb_white_at_unit_exposure():
     # half the exposure: linear 0.5 encoded by the sRGB curve (IEC 61966-2-1)
     half = 1.055 * 0.5 ** (1 / 2.4) - 0.055
     np.testing.assert_allclose(img.to_srgb(exposure=0.5), half, atol=2e-3)
+    # Display P3: the white is display white too; a saturated render differs from sRGB
+    np.testing.assert_allclose(img.to_display_rgb("Display P3"), 1.0, atol=2e-3)
     # an 18 % grey card under the same light
     grey = render_plate(PaintedPlate(LambertianBRDF(0.18)), cam, DirectionalLight.from_angles(0.0, 0.0, "D65", 1.0))
     np.testing.assert_allclose(grey.to_srgb(), 1.055 * 0.18 ** (1 / 2.4) - 0.055, atol=2e-3)

@@ -72,6 +72,8 @@ def _common(f):
         click.option("--height", type=int, default=683, show_default=True),
         click.option("--exposure", type=float, default=1.0, show_default=True,
                      help="1: a white diffuser under the light is display white."),
+        click.option("--colourspace", type=click.Choice(("sRGB", "Display P3")), default="sRGB", show_default=True,
+                     help="Display encoding of the PNG."),
     ]
     for o in reversed(opts):
         f = o(f)
@@ -90,7 +92,7 @@ def _common(f):
 @click.option("--glint-spread-deg", type=float, default=1.0, show_default=True)
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the flake unit cell.")
 def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_deg, light_azimuth_deg, irradiance,
-              environment, env_radiance, width, height, exposure, cells, camera_mm, look_at_mm, fov_deg, stereo,
+              environment, env_radiance, width, height, exposure, colourspace, cells, camera_mm, look_at_mm, fov_deg, stereo,
               interocular_mm, glint_spread_deg, seed):
     """Render a painted plate to OUTPUT.exr and OUTPUT.png."""
     from nmmm.appearance.render.camera import PinholeCamera
@@ -112,7 +114,7 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
     files = []
     for suffix, img in named.items():
         files.append(str(img.write_exr(f"{output}{suffix}.exr")))
-        files.append(str(img.write_png(f"{output}{suffix}.png", exposure=exposure)))
+        files.append(str(img.write_png(f"{output}{suffix}.png", exposure=exposure, colourspace=colourspace)))
     click.echo(json.dumps({"plate": repr(plate), "files": files,
                            "glints": {k or "mono": v.metadata["n_glints"] for k, v in named.items()}}, indent=1))
 
@@ -127,7 +129,7 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
 @click.option("--stereo", is_flag=True)
 @click.option("--interocular-mm", type=float, default=65.0, show_default=True)
 def object_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_deg, light_azimuth_deg, irradiance,
-               environment, env_radiance, width, height, exposure, shape, distance_mm, fov_deg, spp, stereo,
+               environment, env_radiance, width, height, exposure, colourspace, shape, distance_mm, fov_deg, spp, stereo,
                interocular_mm):
     """Render a painted 3-D object with Mitsuba 3 to OUTPUT.exr and OUTPUT.png."""
     from nmmm.errors import NmmmError
@@ -147,5 +149,5 @@ def object_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith
     files = []
     for suffix, img in named.items():
         files.append(str(img.write_exr(f"{output}{suffix}.exr")))
-        files.append(str(img.write_png(f"{output}{suffix}.png", exposure=exposure)))
+        files.append(str(img.write_png(f"{output}{suffix}.png", exposure=exposure, colourspace=colourspace)))
     click.echo(json.dumps({"files": files}, indent=1))

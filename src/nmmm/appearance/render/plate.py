@@ -38,7 +38,7 @@ Public objects
 - :class:`LambertianBRDF` — ideal diffuser f = ρ/π (reference plate).
 - :class:`PaintedPlate` — paint, flake unit cell and size; :func:`seed_metallic_plate`.
 - :class:`SpectralImage` — radiance (H, W, L), ``to_xyz``, ``to_srgb`` (exposure),
-  ``write_png``, ``write_exr`` (Fichet et al. 2021 layout).
+  ``to_display_rgb`` (sRGB / Display P3), ``write_png``, ``write_exr`` (Fichet et al. 2021 layout).
 - :func:`render_plate`, :func:`render_stereo_plate`.
 
 References
@@ -259,21 +259,44 @@ class SpectralImage:
         return xyz_to_srgb(self.to_xyz(), white_xyz=white if white[1] > 0 else None, clip=clip,
                            exposure=self.exposure_scale(e))
 
+    def to_display_rgb(self, colourspace: str = "sRGB", exposure: float = 1.0, clip: bool = True) -> np.ndarray:
+        """Encoded RGB (H, W, 3) for a calibrated display: ``"sRGB"`` (IEC 61966-2-1) or
+        ``"Display P3"`` (P3 primaries, D65, sRGB transfer curve), via colour-science; the
+        lights' white is adapted to D65 (CAT02) and ``exposure`` = 1 maps a white diffuser
+        to display white."""
+        import colour
+
+        if colourspace == "sRGB":
+            return self.to_srgb(exposure, clip)
+        if colourspace not in ("Display P3",):
+            raise InvalidInputError(f"colourspace must be 'sRGB' or 'Display P3', got {colourspace!r}")
+        e = float(check_finite(exposure, "exposure"))
+        if e <= 0:
+            raise InvalidInputError(f"exposure must be > 0, got {exposure!r}")
+        white = self.white_xyz
+        xyz = self.to_xyz() / 100.0 * self.exposure_scale(e)
+        xy_w = colour.XYZ_to_xy(white / white[1]) if white[1] > 0 else colour.CCS_ILLUMINANTS[
+            "CIE 1931 2 Degree Standard Observer"]["D65"]
+        rgb = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES[colourspace], illuminant=xy_w,
+                                chromatic_adaptation_transform="CAT02", apply_cctf_encoding=True)
+        return np.clip(rgb, 0.0, 1.0) if clip else rgb
+
     def linear_srgb(self) -> np.ndarray:
         """Linear sRGB (H, W, 3) of XYZ/100 (no exposure, no encoding) — the EXR preview."""
         import colour
 
         return colour.XYZ_to_sRGB(self.to_xyz() / 100.0, apply_cctf_encoding=False)
 
-    def write_png(self, path, exposure: float = 1.0):
-        """8-bit sRGB PNG (exposure as in :meth:`to_srgb`)."""
+    def write_png(self, path, exposure: float = 1.0, colourspace: str = "sRGB"):
+        """8-bit PNG for a display in ``colourspace`` ("sRGB" or "Display P3"; exposure as
+        in :meth:`to_srgb`)."""
         from pathlib import Path
 
         from PIL import Image
 
         p = Path(path)
         p.parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(np.round(self.to_srgb(exposure) * 255).astype(np.uint8)).save(p)
+        Image.fromarray(np.round(self.to_display_rgb(colourspace, exposure) * 255).astype(np.uint8)).save(p)
         return p
 
     def write_exr(self, path, half: bool = False):
