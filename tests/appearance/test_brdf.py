@@ -248,6 +248,13 @@ def test_absorbing_coat_raises():
         PaintBRDF(ClearCoat(1.5 + 0.1j))(W, _dir(0.0), _dir(10.0))
 
 
+def test_unphysical_coat_index_raises():
+    from nmmm.materials.models import Cauchy
+
+    with pytest.raises(InvalidInputError, match="µm"):  # B given in nm² where µm² is meant
+        PaintBRDF(ClearCoat(Cauchy(A=1.5, B=4000.0)))(W, _dir(0.0), _dir(10.0))
+
+
 def test_unknown_component_raises():
     with pytest.raises(InvalidInputError, match="component"):
         opaque_paint(0.5)(W, _dir(0.0), _dir(10.0), components="sheen")

@@ -307,6 +307,11 @@ class ClearCoat:
             )
         if np.any(nk.real <= 1.0):
             raise InvalidInputError("the clear coat index must be > 1")
+        if np.any(nk.real > 4.0):
+            raise InvalidInputError(
+                f"the clear coat index reaches {nk.real.max():.4g}; a clear coat or binder is a dielectric "
+                "with n of about 1.3-2 (at most ~3): check the material's units (e.g. Cauchy B is in µm²)"
+            )
         return nk.real
 
 
