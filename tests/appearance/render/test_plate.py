@@ -193,3 +193,13 @@ def test_spd_files_and_names(tmp_path):
     short.write_text("400,1\n700,1\n")
     with pytest.raises(OutOfRangeError, match="covers 400-700"):
         render_plate(plate, cam, DirectionalLight(spectrum=str(short)))
+
+
+def test_plate_from_microstructure_deposit_renders_glints():
+    from nmmm.appearance.render import deposit_metallic_plate
+
+    plate = deposit_metallic_plate(cells=(30, 20), seed=3)
+    assert plate.cells == (30, 20) and len(plate.flakes) > 50
+    cam = PinholeCamera((0, -40, 300), (0, 0, 0), fov_deg=3, resolution=(48, 32))
+    img = render_plate(plate, cam, DirectionalLight.from_angles(20.0, 90.0, "D65"))
+    assert img.metadata["n_glints"] > 0 and np.isfinite(img.radiance).all()

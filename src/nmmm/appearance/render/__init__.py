@@ -36,6 +36,7 @@ from nmmm.appearance.render.plate import (
     PaintedPlate,
     SpectralImage,
     render_plate,
+    deposit_metallic_plate,
     render_stereo_plate,
     seed_metallic_plate,
 )
@@ -60,4 +61,5 @@ __all__ = [
     "render_plate",
     "render_stereo_plate",
     "seed_metallic_plate",
+    "deposit_metallic_plate",
 ]

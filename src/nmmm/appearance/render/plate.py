@@ -36,7 +36,8 @@ Per pixel, the radiance is
 Public objects
 --------------
 - :class:`LambertianBRDF` — ideal diffuser f = ρ/π (reference plate).
-- :class:`PaintedPlate` — paint, flake unit cell and size; :func:`seed_metallic_plate`.
+- :class:`PaintedPlate` — paint, flake unit cell and size; :func:`seed_metallic_plate`
+  (Poisson flakes), :func:`deposit_metallic_plate` (the microstructure deposit model).
 - :class:`SpectralImage` — radiance (H, W, L), ``to_xyz``, ``to_srgb`` (exposure),
   ``to_display_rgb`` (sRGB / Display P3), ``write_png``, ``write_exr`` (Fichet et al. 2021 layout).
 - :func:`render_plate`, :func:`render_stereo_plate`.
@@ -80,6 +81,7 @@ __all__ = [
     "PaintedPlate",
     "SpectralImage",
     "seed_metallic_plate",
+    "deposit_metallic_plate",
     "render_plate",
     "render_stereo_plate",
 ]
@@ -197,6 +199,21 @@ def seed_metallic_plate(cells=(332, 240), cell_um: float = 450.0, optical_depth:
     if cx < 1 or cy < 1:
         raise InvalidInputError(f"cells must be positive counts, got {cells!r}")
     return PaintedPlate(paint, fl, (cx * cell * 1e-6, cy * cell * 1e-6))
+
+
+def deposit_metallic_plate(cells=(332, 240), seed: int = 1, **kwargs) -> PaintedPlate:
+    """The grey metallic plate with its unit cell drawn by the deposit model of
+    :func:`nmmm.microstructure.flake_deposit` (Couka, Willot & Jeulin 2012; periodic
+    450 × 450 × 20 µm cell, exclusion between flakes), through
+    :func:`nmmm.appearance.examples.grey_metallic_from_deposit` (``kwargs`` go there)."""
+    from nmmm.appearance.examples import grey_metallic_from_deposit
+
+    paint, flakes = grey_metallic_from_deposit(seed=seed, **kwargs)
+    cw, ch = flakes.region_nm[0] * 1e-6, flakes.region_nm[1] * 1e-6
+    cx, cy = (int(c) for c in cells)
+    if cx < 1 or cy < 1:
+        raise InvalidInputError(f"cells must be positive counts, got {cells!r}")
+    return PaintedPlate(paint, flakes, (cx * cw, cy * ch))
 
 
 # --------------------------------------------------------------------------------------
@@ -698,7 +715,8 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     on = hit & (np.abs(P[..., 0]) <= hx) & (np.abs(P[..., 1]) <= hy)
     if not on.any():
         raise InvalidInputError(
-            "no pixel of the camera sees the plate: it looks past it; aim the camera at the plate "
+            "no pixel centre of the camera falls on the plate: it looks past it (or the plate covers less than "
+            "a pixel); aim the camera at the plate "
             f"(plate {plate.size_mm[0]:g} x {plate.size_mm[1]:g} mm centred on the origin) or widen fov_deg"
         )
     spectra = [lt.spectral(w) for lt in lights]
