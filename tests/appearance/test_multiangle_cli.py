@@ -32,6 +32,18 @@ def test_table_and_sparkle_commands(tmp_path):
     assert json.loads(r.output)["n_sparkles"] == 1
 
 
+def test_commands_refuse_bad_files(tmp_path, capsys):
+    from nmmm.cli import main
+
+    (tmp_path / "bad.png").write_text("not an image")
+    assert main(["appearance", "sparkle", str(tmp_path / "bad.png"), "--pixel-size-um", "10"]) == 2
+    assert "cannot read the image" in capsys.readouterr().err
+    assert main(["appearance", "table", "--paint", "solid", "--out", str(tmp_path / "no" / "t.nc")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert main(["appearance", "table", "--paint", "solid", "--out", str(tmp_path / "t.txt")]) == 2
+    assert "use .nc or .csv" in capsys.readouterr().err
+
+
 @pytest.mark.slow
 def test_demo_hook(tmp_path):
     from nmmm.appearance.examples import demo

@@ -1202,13 +1202,17 @@ def write_brdf_table(path, brdf: PaintBRDF, wavelength_nm, **kwargs):
     (``.csv``: columns theta_h_deg, theta_d_deg, wavelength_nm, brdf_per_sr)."""
     from pathlib import Path
 
+    from nmmm.errors import DataFileError
+
     p = Path(path)
+    if p.suffix not in (".nc", ".csv"):
+        raise InvalidInputError(f"unknown table format '{p.suffix}'; use .nc or .csv")
+    if not p.parent.is_dir():
+        raise DataFileError(f"cannot write {p}: the directory {p.parent} does not exist; create it first")
     ds = brdf_table(brdf, wavelength_nm, **kwargs)
     if p.suffix == ".nc":
         ds.to_netcdf(p, engine="h5netcdf")
-    elif p.suffix == ".csv":
+    else:
         df = ds["brdf"].to_dataframe(name="brdf_per_sr").reset_index()
         df.to_csv(p, index=False, float_format="%.6g")
-    else:
-        raise InvalidInputError(f"unknown table format '{p.suffix}'; use .nc or .csv")
     return p

@@ -101,17 +101,21 @@ def table(paint, tio2_nm, tilt_deg, optical_depth, base, roughness, out_path, n_
 def sparkle(image, pixel_size_um, encoding, threshold):
     """Sparkle and graininess of a photograph or render of a plate."""
     from nmmm.appearance.sparkle import sparkle_graininess
+    from nmmm.errors import DataFileError
 
-    if image.lower().endswith((".tif", ".tiff")):
-        import tifffile
+    try:
+        if image.lower().endswith((".tif", ".tiff")):
+            import tifffile
 
-        arr = tifffile.imread(image)
-    elif image.lower().endswith(".npy"):
-        arr = np.load(image)
-    else:
-        from PIL import Image
+            arr = tifffile.imread(image)
+        elif image.lower().endswith(".npy"):
+            arr = np.load(image)
+        else:
+            from PIL import Image
 
-        arr = np.asarray(Image.open(image).convert("RGB"))
+            arr = np.asarray(Image.open(image).convert("RGB"))
+    except Exception as exc:  # PIL, tifffile and numpy each raise their own kinds
+        raise DataFileError(f"cannot read the image {image!r} ({exc}); give a PNG, JPEG, TIFF or .npy array") from exc
     m = sparkle_graininess(arr, pixel_size_um, encoding=encoding, threshold_contrast=threshold)
     click.echo(json.dumps(m.as_dict(), indent=1))
 
