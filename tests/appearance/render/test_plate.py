@@ -203,3 +203,25 @@ def test_plate_from_microstructure_deposit_renders_glints():
     cam = PinholeCamera((0, -40, 300), (0, 0, 0), fov_deg=3, resolution=(48, 32))
     img = render_plate(plate, cam, DirectionalLight.from_angles(20.0, 90.0, "D65"))
     assert img.metadata["n_glints"] > 0 and np.isfinite(img.radiance).all()
+
+
+def test_mirror_image_of_a_lamp_in_the_clear_coat():
+    """A smooth coat (n = 1.5) mirrors a spherical lamp: radiance F(θ) I / (π ρ²) with
+    F = ((n − 1)/(n + 1))² = 0.04 at normal incidence (Fresnel, Born & Wolf §1.5)."""
+    from nmmm.appearance.brdf import clear_dielectric
+
+    plate = PaintedPlate(clear_dielectric(1.5), size_mm=(100, 100))
+    cam = PinholeCamera((0, 0, 500), (0, 0, 0), fov_deg=10, resolution=(41, 41))
+    lamp = PointLight((0, 0, 500), 1.0, intensity=2.0, radius_mm=20.0)  # behind the camera
+    img = render_plate(plate, cam, lamp)
+    centre = img.radiance[20, 20, 40]
+    assert centre == pytest.approx(0.04 * 2.0 / (np.pi * 0.02 ** 2), rel=2e-3)
+    # the disc's image: radius ρ/2 at the plate (mirror distance 2 × 500 mm), ~2 mm
+    lit = img.radiance[20, :, 40] > 0.5 * centre
+    pix_mm = 2 * 500 * np.tan(np.radians(5)) / 41
+    assert abs(lit.sum() * pix_mm - 20.0) < 3 * pix_mm
+    # the Sun (0.53 deg disc) seen in the coat: radiance E / Ω
+    sun = DirectionalLight((0, 0, 1), 1.0, irradiance=1.0, angular_diameter_deg=0.53)
+    img2 = render_plate(plate, cam, sun)
+    omega = 2 * np.pi * (1 - np.cos(np.radians(0.265)))
+    assert img2.radiance[20, 20, 40] == pytest.approx(0.04 / omega, rel=2e-3)

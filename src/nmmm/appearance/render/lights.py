@@ -173,13 +173,20 @@ def _unit(v, name):
 @dataclass(frozen=True)
 class DirectionalLight:
     """A distant light: ``direction`` points from the scene towards the light (plate frame,
-    z = plate normal); spectral irradiance on a surface facing it ``irradiance × SPD(λ)``."""
+    z = plate normal); spectral irradiance on a surface facing it ``irradiance × SPD(λ)``.
+    ``angular_diameter_deg`` > 0 gives the source a disc (radiance E⊥ / Ω, Ω its solid
+    angle) whose mirror image appears in a smooth clear coat."""
 
     direction: tuple = (0.0, 0.0, 1.0)
     spectrum: object = "D65"
     irradiance: float = 1.0
+    angular_diameter_deg: float = 0.0
 
     def __post_init__(self):
+        a = float(check_finite(self.angular_diameter_deg, "angular_diameter_deg"))
+        if not 0 <= a < 90:
+            raise InvalidInputError(f"angular_diameter_deg must lie in [0, 90) (the Sun: 0.53), got {a!r}")
+        object.__setattr__(self, "angular_diameter_deg", a)
         object.__setattr__(self, "direction", tuple(_unit(self.direction, "light direction")))
         object.__setattr__(self, "spectrum", spd(self.spectrum))
         e = float(check_finite(self.irradiance, "irradiance"))
@@ -188,10 +195,12 @@ class DirectionalLight:
         object.__setattr__(self, "irradiance", e)
 
     @classmethod
-    def from_angles(cls, zenith_deg: float, azimuth_deg: float = 0.0, spectrum="D65", irradiance: float = 1.0):
+    def from_angles(cls, zenith_deg: float, azimuth_deg: float = 0.0, spectrum="D65", irradiance: float = 1.0,
+                    angular_diameter_deg: float = 0.0):
         """Light from zenith angle θ (0 = overhead) and azimuth φ (from +x towards +y), degrees."""
         t, p = np.radians(zenith_deg), np.radians(azimuth_deg)
-        return cls((np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)), spectrum, irradiance)
+        return cls((np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)), spectrum, irradiance,
+                   angular_diameter_deg)
 
     def spectral(self, wavelength_nm) -> np.ndarray:
         return self.irradiance * self.spectrum.on(wavelength_nm)
@@ -200,13 +209,20 @@ class DirectionalLight:
 @dataclass(frozen=True)
 class PointLight:
     """An isotropic point light at ``position_mm`` (plate frame) of spectral intensity
-    ``intensity × SPD(λ)`` per steradian; irradiance falls as 1/r² with r in metres."""
+    ``intensity × SPD(λ)`` per steradian; irradiance falls as 1/r² with r in metres.
+    ``radius_mm`` > 0 makes it a small uniform sphere (radiance I / (π ρ²), ρ in metres)
+    whose mirror image appears in a smooth clear coat; it still lights the plate as a point."""
 
     position_mm: tuple = (0.0, 0.0, 1000.0)
     spectrum: object = "D65"
     intensity: float = 1.0
+    radius_mm: float = 0.0
 
     def __post_init__(self):
+        r = float(check_finite(self.radius_mm, "radius_mm"))
+        if r < 0:
+            raise InvalidInputError(f"radius_mm must be >= 0, got {r!r}")
+        object.__setattr__(self, "radius_mm", r)
         p = np.asarray(check_finite(self.position_mm, "light position_mm"), float).ravel()
         if p.shape != (3,):
             raise InvalidInputError(f"light position_mm must be a 3-vector, got shape {p.shape}")

@@ -765,6 +765,10 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     else:
         img[off] = np.asarray(bg, np.float32)[None, :]
 
+    # --- mirror images of finite-size lights in a smooth clear coat (the coat's Dirac)
+    if hasattr(plate.smooth_brdf, "specular_reflectance"):
+        _add_light_images(plate.smooth_brdf, camera, lights, spectra, w, dirs, P, on, img)
+
     # --- glints of the discrete flakes
     n_glints = 0
     if plate.flakes is not None and lights:
@@ -781,6 +785,36 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
         white += env
     meta = {"plate": repr(plate), "glint_spread_deg": sig, "n_glints": int(n_glints), "coarse_step": step}
     return SpectralImage(w, img, on, white, camera, meta)
+
+
+def _add_light_images(brdf, camera, lights, spectra, w, dirs, P, on, img):
+    """Add F(θ, λ) L_light(λ) where the mirror of the view ray meets a lamp of finite size
+    (a directional light's disc, a point light's sphere)."""
+    m = -dirs.copy()
+    m[..., :2] *= -1.0  # mirror direction of the view ray (towards where the light must be)
+    for lt, sp in zip(lights, spectra):
+        if isinstance(lt, DirectionalLight):
+            if lt.angular_diameter_deg <= 0:
+                continue
+            a = np.radians(lt.angular_diameter_deg) / 2
+            hit = on & (m @ np.asarray(lt.direction) >= np.cos(a))
+            lum = sp / (2 * np.pi * (1 - np.cos(a)))  # E⊥ / Ω
+        else:
+            if lt.radius_mm <= 0:
+                continue
+            c = np.asarray(lt.position_mm)
+            oc = c - P
+            tca = np.einsum("...k,...k->...", oc, m)
+            d2 = np.einsum("...k,...k->...", oc, oc) - tca * tca
+            hit = on & (tca > 0) & (d2 <= lt.radius_mm ** 2)
+            lum = sp / (np.pi * (lt.radius_mm * 1e-3) ** 2)  # I / (π ρ²), ρ in m
+        if not hit.any():
+            continue
+        wo = -dirs[hit]
+        wo[:, 2] = np.maximum(wo[:, 2], 0.0)
+        wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+        F = brdf.specular_reflectance(w, wo)
+        img[hit] += (F * lum[None, :]).astype(np.float32)
 
 
 def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomize_tiles=True, tile_seed=0):
