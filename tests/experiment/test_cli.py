@@ -36,7 +36,7 @@ def test_stats_and_export_commands(simulated_db, tmp_path, capsys):
     assert all(r["correct"] == str(int(r["photo_position"] == r["chosen_position"])) for r in rows)
 
 
-def test_commands_refuse_bad_input(tmp_path, capsys):
+def test_commands_refuse_bad_input(tmp_path, capsys, simulated_db):
     (tmp_path / "pairs.toml").write_text("[[pair]]\nrendered = 'a.png'\nphoto = 'b.png'\n")
     assert main(["experiment", "serve", str(tmp_path / "pairs.toml"), "--db", str(tmp_path / "x.sqlite")]) == 2
     err = capsys.readouterr().err
@@ -47,6 +47,11 @@ def test_commands_refuse_bad_input(tmp_path, capsys):
     (tmp_path / "junk.sqlite").write_text("not a database" * 100)
     assert main(["experiment", "export", str(tmp_path / "junk.sqlite"), "-o", str(tmp_path / "o.csv")]) == 2
     assert "not an nmmm response database" in capsys.readouterr().err
+    assert not (tmp_path / "o.csv").exists()   # nothing written for a bad database
+    assert main(["experiment", "export", str(simulated_db), "-o", str(tmp_path / "no" / "o.csv")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert main(["experiment", "stats", str(simulated_db), "--plot", str(tmp_path / "no" / "p.png")]) == 2
+    assert "does not exist" in capsys.readouterr().err
 
 
 def test_demo_hook(tmp_path):

@@ -14,6 +14,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+from nmmm.errors import DataFileError
 from nmmm.experiment.storage import read_responses
 
 CSV_COLUMNS = ("participant_id", "trial_index", "pair_id", "label", "repetition", "stereo", "photo_position",
@@ -35,21 +36,21 @@ def _rows(db_path):
 
 def write_csv(db_path, out) -> int:
     """Write every answered trial of ``db_path`` as CSV to ``out`` (path or text file); return the row count."""
+    rows = list(_rows(db_path))  # read first: a bad database leaves no empty CSV behind
     if hasattr(out, "write"):
-        return _write(db_path, out)
+        return _write(rows, out)
     out = Path(out)
+    if not out.parent.is_dir():
+        raise DataFileError(f"cannot write {out}: the directory {out.parent} does not exist; create it first")
     with open(out, "w", newline="", encoding="utf-8") as fh:
-        return _write(db_path, fh)
+        return _write(rows, fh)
 
 
-def _write(db_path, fh) -> int:
+def _write(rows, fh) -> int:
     w = csv.DictWriter(fh, fieldnames=CSV_COLUMNS, lineterminator="\n")
     w.writeheader()
-    n = 0
-    for row in _rows(db_path):
-        w.writerow(row)
-        n += 1
-    return n
+    w.writerows(rows)
+    return len(rows)
 
 
 __all__ = ["write_csv", "CSV_COLUMNS"]

@@ -594,6 +594,10 @@ def plot_analysis(a: ExperimentAnalysis, path=None):
     import matplotlib
 
     if path is not None:
+        from pathlib import Path
+
+        if not Path(path).parent.is_dir():
+            raise InvalidInputError(f"cannot write the plot {path}: the directory {Path(path).parent} does not exist")
         matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
