@@ -4,7 +4,8 @@ spectral film output in the Fichet et al. (2021) EXR layout.
 Public functions
 ----------------
 - :func:`scene_dict` — a Mitsuba scene dictionary (lengths in mm) with the paint as
-  ``nmmm_paint``, nmmm lights (directional → ``directional``, point → ``point``, uniform
+  ``nmmm_paint``, nmmm lights (directional → ``directional`` (its angular size is ignored),
+  point → ``point``, or a spherical ``area`` emitter when ``radius_mm`` > 0, uniform
   sky → ``constant`` with a spectral radiance, an (H, W, L) lat-long spectral map →
   ``nmmm_envmap``) and one or two perspective sensors whose
   ``specfilm`` has one box-shaped band per wavelength.
@@ -138,6 +139,12 @@ def scene_dict(brdf, shape: str = "sphere", lights=(), environment=None, positio
         if isinstance(lt, DirectionalLight):
             d[f"light{k}"] = {"type": "directional", "direction": [-float(v) for v in lt.direction],
                               "irradiance": _spectrum(lt.spectrum, lt.irradiance)}
+        elif isinstance(lt, PointLight) and lt.radius_mm > 0:
+            # a spherical lamp: radiance I / (π ρ²) with ρ in metres (E = I / r², r in m)
+            d[f"light{k}"] = {"type": "sphere", "center": [float(v) for v in lt.position_mm],
+                              "radius": float(lt.radius_mm),
+                              "emitter": {"type": "area", "radiance": _spectrum(
+                                  lt.spectrum, lt.intensity / (np.pi * (lt.radius_mm * 1e-3) ** 2))}}
         elif isinstance(lt, PointLight):
             # nmmm: E = I / r² with r in metres; the scene is in mm
             d[f"light{k}"] = {"type": "point", "position": [float(v) for v in lt.position_mm],
@@ -181,7 +188,8 @@ def render_object(brdf, shape: str = "sphere", lights=(), environment=None, dist
     """Render ``shape`` painted with ``brdf`` through Mitsuba 3 (``llvm_ad_spectral``).
 
     The camera sits at ``distance_mm`` from ``look_at_mm`` at ``elevation_deg`` above the
-    xy-plane on the −y side (or at ``position_mm``). Returns a list of
+    xy-plane on the −y side (or at ``position_mm``); image up is +z (+y when looking along z).
+    Returns a list of
     :class:`~nmmm.appearance.render.plate.SpectralImage` (left, right for ``stereo``):
     band values divided by the band width are the mean spectral radiance per band.
     """
@@ -192,7 +200,9 @@ def render_object(brdf, shape: str = "sphere", lights=(), environment=None, dist
     if position_mm is None:
         e = np.radians(elevation_deg)
         position_mm = (0.0, -distance_mm * np.cos(e), distance_mm * np.sin(e))
-    d, dl, ns = scene_dict(brdf, shape, lights, environment, position_mm, look_at_mm, (0.0, 0.0, 1.0), fov_deg,
+    f = np.asarray(look_at_mm, float) - np.asarray(position_mm, float)
+    up = (0.0, 0.0, 1.0) if np.linalg.norm(np.cross(f / np.linalg.norm(f), [0.0, 0.0, 1.0])) > 1e-3 else (0.0, 1.0, 0.0)
+    d, dl, ns = scene_dict(brdf, shape, lights, environment, position_mm, look_at_mm, up, fov_deg,
                            resolution, spp, w, stereo, interocular_mm, plate_size_mm, variant=variant)
     scene = mi.load_dict(d)
     if isinstance(lights, (DirectionalLight, PointLight)):
