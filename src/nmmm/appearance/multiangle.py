@@ -11,7 +11,10 @@ specular side (γ = 45°: along the normal; γ = 110°: 65° on the illuminator'
   flake pigmented materials), :data:`ASTM_E2194_ALL_ASPECULAR_DEG` adds the optional
   25° and 75°.
 - :data:`ASTM_E2539_ASPECULAR_DEG` — −15°, 15°, 25°, 45°, 75°, 110° at 45° illumination
-  (interference pigments).
+  (interference pigments). E2539 (§1.2) also calls for more than one illumination angle;
+  only the 45° set is tabulated here. Geometries at another illumination angle (e.g. the
+  15° ones of multi-angle instruments, written 15as−45 … 15as80) are evaluated with
+  ``illumination_deg=15``; that list was not checked against the standard's text.
 - :func:`aspecular_directions` — (ωi, ωo) unit vectors for given aspecular angles.
 - :func:`multiangle_reflectance` — reflectance factors R = π f at those geometries.
 - :func:`multiangle_lab` -> :class:`MultiAngleColour` (L*, a*, b*, C*, h per angle).
