@@ -17,7 +17,9 @@ Per pixel, the radiance is
   grid of pixels (every ``coarse_step`` pixels) and interpolated bilinearly.
 - ``a(ωo)`` — the directional albedo (reciprocity: a uniform sky of radiance L_env is
   reflected as a(ωo) L_env), Dirac of a smooth coat included. A point-like light's mirror
-  image in a smooth coat has zero area and is not drawn.
+  image in a smooth coat has zero area and is not drawn; lamps of finite size
+  (``DirectionalLight.angular_diameter_deg``, ``PointLight.radius_mm``) appear as
+  F(θ, λ) L_lamp(λ) where the mirrored view ray meets them.
 - ``L_glints`` — each flake in the pixel's footprint that mirrors a light towards the
   camera (Snell in and out of the coat, Fresnel transmission T_i T_o, flake reflectance at
   its local angle, mean-field attenuation by the flakes above it, exactly as
