@@ -225,3 +225,28 @@ def test_mirror_image_of_a_lamp_in_the_clear_coat():
     img2 = render_plate(plate, cam, sun)
     omega = 2 * np.pi * (1 - np.cos(np.radians(0.265)))
     assert img2.radiance[20, 20, 40] == pytest.approx(0.04 / omega, rel=2e-3)
+
+
+def test_latlong_environment_lambertian_and_uniform_limits():
+    """Lambertian plate (ρ = 0.5) under a sky L(θ) = 0.5 + 1.5 cos θ, black ground:
+    L = ρ · 2∫ L(μ) μ dμ = 0.75 (analytic). A constant map equals UniformEnvironment through
+    the paint's albedo (reciprocity) within the 8 × 16 quadrature error."""
+    from nmmm.appearance.brdf import opaque_paint
+    from nmmm.appearance.render import LatLongEnvironment
+
+    sky = LatLongEnvironment.sky(W, 2.0, 0.5, ground=0.0, height=64, width=16)
+    cam = PinholeCamera((0, 0, 300), (0, 0, 0), fov_deg=8, resolution=(20, 16))
+    img = render_plate(PaintedPlate(LambertianBRDF(0.5), size_mm=(200, 200)), cam, environment=sky)
+    np.testing.assert_allclose(img.radiance[..., 40], 0.75, rtol=2e-3)
+    paint = PaintedPlate(opaque_paint(0.4), size_mm=(200, 200))
+    cam2 = PinholeCamera((0, -100, 300), (0, 0, 0), fov_deg=20, resolution=(32, 24))
+    a = render_plate(paint, cam2, environment=LatLongEnvironment(W, np.ones((16, 32, W.size))))
+    b = render_plate(paint, cam2, environment=UniformEnvironment(1.0, 1.0))
+    np.testing.assert_allclose(a.radiance, b.radiance, rtol=5e-3)
+    # the mirror image of the map in the smooth coat: a bright zenith patch only where the
+    # mirrored view ray points into it
+    spot = np.zeros((16, 32, W.size))
+    spot[0] = 50.0
+    c = render_plate(paint, PinholeCamera((0, 0, 300), (0, 0, 0), fov_deg=40, resolution=(33, 33)),
+                     environment=LatLongEnvironment(W, spot))
+    assert c.radiance[16, 16, 40] > 10 * c.radiance[0, 0, 40]

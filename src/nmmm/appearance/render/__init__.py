@@ -24,6 +24,7 @@ from nmmm.appearance.render.exr import (
 )
 from nmmm.appearance.render.lights import (
     DirectionalLight,
+    LatLongEnvironment,
     PointLight,
     SpectralPowerDistribution,
     UniformEnvironment,
@@ -49,6 +50,7 @@ __all__ = [
     "spectral_channel_name",
     "write_spectral_exr",
     "DirectionalLight",
+    "LatLongEnvironment",
     "PointLight",
     "SpectralPowerDistribution",
     "UniformEnvironment",

@@ -14,6 +14,8 @@ Public objects
 - :class:`PointLight` — an isotropic point source of spectral intensity ``I(λ)`` (per sr)
   at ``position_mm``; irradiance ``I / r²`` (r in metres).
 - :class:`UniformEnvironment` — constant spectral radiance from the whole sky.
+- :class:`LatLongEnvironment` — a spectral latitude–longitude environment map
+  (``LatLongEnvironment.sky(...)``: zenith/horizon/ground spectra).
 
 Units: if the SPD is absolute (W m⁻² nm⁻¹ for a directional light, W sr⁻¹ nm⁻¹ for a point
 light, W m⁻² sr⁻¹ nm⁻¹ for the environment), the rendered radiance is in
@@ -43,6 +45,7 @@ __all__ = [
     "DirectionalLight",
     "PointLight",
     "UniformEnvironment",
+    "LatLongEnvironment",
     "default_wavelengths",
 ]
 
@@ -253,3 +256,90 @@ class UniformEnvironment:
 
     def spectral(self, wavelength_nm) -> np.ndarray:
         return self.radiance * self.spectrum.on(wavelength_nm)
+
+
+@dataclass(frozen=True, repr=False)
+class LatLongEnvironment:
+    """A spectral environment map: radiance ``radiance`` (H, W, L) on ``wavelength_nm`` over
+    a latitude–longitude grid (z up = the plate normal; row i at θ = (i + ½) π / H from the
+    zenith, column j at φ = (j + ½) 2π / W from +x towards +y). Nearest-texel lookup."""
+
+    wavelength_nm: np.ndarray
+    radiance: np.ndarray
+    name: str = "environment map"
+
+    def __post_init__(self):
+        w = np.asarray(check_finite(self.wavelength_nm, "wavelength_nm"), float).ravel()
+        r = np.asarray(check_finite(self.radiance, "environment radiance"), float)
+        if r.ndim != 3 or r.shape[2] != w.size:
+            raise InvalidInputError(f"radiance must be (height, width, {w.size}) on wavelength_nm, got {r.shape}")
+        if np.any(r < 0):
+            raise InvalidInputError("environment radiance must be >= 0")
+        object.__setattr__(self, "wavelength_nm", w)
+        object.__setattr__(self, "radiance", r)
+
+    def __repr__(self):
+        h, w_, L = self.radiance.shape
+        return f"<LatLongEnvironment '{self.name}' {w_}x{h}, {L} wavelengths>"
+
+    @classmethod
+    def sky(cls, wavelength_nm, zenith, horizon, ground=None, height: int = 32, width: int = 64, name="sky"):
+        """Zenith spectrum blended into the horizon's as cos θ; ``ground`` (default
+        0.2 × horizon) below the horizon (:func:`mitsuba_envmap.latlong_environment`)."""
+        from nmmm.appearance.render.mitsuba_envmap import latlong_environment
+
+        w = np.asarray(wavelength_nm, float).ravel()
+        return cls(w, latlong_environment(w, zenith, horizon, ground, height, width), name)
+
+    def _on(self, wavelength_nm):
+        w = as_wavelength_nm(wavelength_nm).ravel()
+        if w.shape == self.wavelength_nm.shape and np.allclose(w, self.wavelength_nm):
+            return self.radiance
+        lo, hi = self.wavelength_nm[0], self.wavelength_nm[-1]
+        if np.any(w < lo - 1e-9) or np.any(w > hi + 1e-9):
+            raise OutOfRangeError(f"environment map covers {lo:g}-{hi:g} nm, the grid spans {w.min():g}-{w.max():g} nm")
+        flat = self.radiance.reshape(-1, self.wavelength_nm.size)
+        return np.stack([np.interp(w, self.wavelength_nm, row) for row in flat]).reshape(
+            self.radiance.shape[:2] + (w.size,))
+
+    def texel(self, directions) -> np.ndarray:
+        """Flat texel index (...) of unit directions (..., 3)."""
+        d = np.asarray(directions, float)
+        h, wd = self.radiance.shape[:2]
+        th = np.arccos(np.clip(d[..., 2], -1, 1))
+        ph = np.mod(np.arctan2(d[..., 1], d[..., 0]), 2 * np.pi)
+        i = np.clip((th / np.pi * h).astype(np.int64), 0, h - 1)
+        j = np.clip((ph / (2 * np.pi) * wd).astype(np.int64), 0, wd - 1)
+        return i * wd + j
+
+    def lookup(self, wavelength_nm, directions) -> np.ndarray:
+        """Radiance (..., L) seen along ``directions`` (nearest texel)."""
+        r = self._on(wavelength_nm)
+        return r.reshape(-1, r.shape[2])[self.texel(directions)]
+
+    def upper_quadrature(self, wavelength_nm, n_theta: int = 8, n_phi: int = 16):
+        """(directions (K, 3), solid angles (K,), radiance (K, L)) of the upper hemisphere,
+        the map averaged over n_theta × n_phi cells (equal steps in θ and φ)."""
+        r = self._on(wavelength_nm)
+        h, wd = r.shape[:2]
+        th_t = (np.arange(h) + 0.5) / h * np.pi
+        ph_t = (np.arange(wd) + 0.5) / wd * 2 * np.pi
+        te = np.linspace(0, np.pi / 2, n_theta + 1)
+        pe = np.linspace(0, 2 * np.pi, n_phi + 1)
+        dirs, sa, rad = [], [], []
+        sin_t = np.sin(th_t)
+        for a in range(n_theta):
+            rows = (th_t >= te[a]) & (th_t < te[a + 1])
+            for b in range(n_phi):
+                cols = (ph_t >= pe[b]) & (ph_t < pe[b + 1])
+                tc, pc = 0.5 * (te[a] + te[a + 1]), 0.5 * (pe[b] + pe[b + 1])
+                if rows.any() and cols.any():
+                    wts = sin_t[rows][:, None] * np.ones(cols.sum())[None, :]
+                    val = np.einsum("ij,ijl->l", wts, r[rows][:, cols]) / wts.sum()
+                else:
+                    val = r.reshape(-1, r.shape[2])[self.texel(
+                        np.array([np.sin(tc) * np.cos(pc), np.sin(tc) * np.sin(pc), np.cos(tc)]))]
+                dirs.append((np.sin(tc) * np.cos(pc), np.sin(tc) * np.sin(pc), np.cos(tc)))
+                sa.append((np.cos(te[a]) - np.cos(te[a + 1])) * (pe[b + 1] - pe[b]))
+                rad.append(val)
+        return np.asarray(dirs), np.asarray(sa), np.asarray(rad)

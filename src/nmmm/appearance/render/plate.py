@@ -11,6 +11,9 @@ Per pixel, the radiance is
 
     L(λ) = Σ_lights f_smooth(ωi, ωo, λ) E_i(λ) cos θi  +  a(ωo, λ) L_env(λ)  +  L_glints(λ)
 
+(for a lat-long environment map the second term is ∫ f L_env cos dω, plus the coat's
+mirror image F(θo, λ) L_env(mirror of ωo)).
+
 - ``f_smooth`` — the paint BRDF without its statistical flake term (coat specular lobe,
   diffuse base seen through the flakes, multiple scattering) when discrete flakes are
   rendered, the full BRDF otherwise. It is smooth over the image: evaluated on a coarse
@@ -66,6 +69,7 @@ import numpy as np
 from nmmm.appearance.render.camera import PinholeCamera, stereo_pair
 from nmmm.appearance.render.lights import (
     DirectionalLight,
+    LatLongEnvironment,
     PointLight,
     UniformEnvironment,
     default_wavelengths,
@@ -370,6 +374,26 @@ if _nb is not None:
                     out[i, j, k] = (w00 * coarse[r0, c0, k] + w10 * coarse[r0 + 1, c0, k]
                                     + w01 * coarse[r0, c0 + 1, k] + w11 * coarse[r0 + 1, c0 + 1, k])
 
+    @_nb.njit(parallel=True, cache=True, fastmath=True)
+    def _mirror_env(img, Fc, ri, rf, ci, cf, texel, on, env):
+        """img += F(θo, λ) (bilinear from the coarse grid) × L_env(mirror direction)."""
+        H = ri.size
+        W = ci.size
+        L = Fc.shape[2]
+        for i in _nb.prange(H):
+            r0 = ri[i]
+            fr = rf[i]
+            for j in range(W):
+                if not on[i, j]:
+                    continue
+                c0 = ci[j]
+                fc = cf[j]
+                t = texel[i, j]
+                for k in range(L):
+                    F = ((1 - fr) * (1 - fc) * Fc[r0, c0, k] + fr * (1 - fc) * Fc[r0 + 1, c0, k]
+                         + (1 - fr) * fc * Fc[r0, c0 + 1, k] + fr * fc * Fc[r0 + 1, c0 + 1, k])
+                    img[i, j, k] += F * env[t, k]
+
     @_nb.njit(cache=True, fastmath=True)
     def _lerp1_nb(tab, th, step):
         x = th / step
@@ -601,6 +625,7 @@ if _nb is not None:
 else:  # pragma: no cover
     _bilinear = _bilinear_py
     _glint_tiles = _glint_tiles_py
+    _mirror_env = _glint_tiles_py
 
 
 # --------------------------------------------------------------------------------------
@@ -614,11 +639,44 @@ def _check_lights(lights, environment):
     for lt in lights:
         if not isinstance(lt, (DirectionalLight, PointLight)):
             raise InvalidInputError(f"lights must be DirectionalLight / PointLight objects, got {type(lt).__name__}")
-    if environment is not None and not isinstance(environment, UniformEnvironment):
-        raise InvalidInputError("environment must be a UniformEnvironment or None")
+    if environment is not None and not isinstance(environment, (UniformEnvironment, LatLongEnvironment)):
+        raise InvalidInputError("environment must be a UniformEnvironment, a LatLongEnvironment or None")
     if not lights and environment is None:
         raise InvalidInputError("no light: give at least one light or an environment")
     return lights, environment
+
+
+def _envmap_smooth(brdf, w, envmap, wo_grid, hit_grid, sub: int = 4, n_theta: int = 8, n_phi: int = 16):
+    """Radiance reflected from a lat-long environment by the non-Dirac BRDF terms,
+    ∑_k f(ω_k, ωo) cos θ_k ΔΩ_k L_k over n_theta × n_phi cells of the upper hemisphere,
+    on every ``sub``-th node of the coarse grid, interpolated back onto it."""
+    nr, nc = wo_grid.shape[:2]
+    rs = np.unique(np.r_[np.arange(0, nr, sub), nr - 1])
+    cs = np.unique(np.r_[np.arange(0, nc, sub), nc - 1])
+    wo = wo_grid[np.ix_(rs, cs)].reshape(-1, 3)
+    qd, qs, qr = envmap.upper_quadrature(w, n_theta, n_phi)
+    out = np.zeros((wo.shape[0], w.size))
+    comps = ("specular", "flakes", "base", "multiple")
+    for k in range(qd.shape[0]):
+        f = brdf.evaluate(w, np.broadcast_to(qd[k], wo.shape), wo, components=comps)
+        out += f * (qd[k, 2] * qs[k] * qr[k])[None, :]
+    out = out.reshape(rs.size, cs.size, w.size)
+    # bilinear back onto the coarse grid (separable linear interpolation)
+    res = _interp_axis(cs, _interp_axis(rs, out, nr, 0), nc, 1)
+    return np.where(hit_grid[..., None], res, 0.0)
+
+
+def _interp_axis(nodes, values, n, axis):
+    """Linear interpolation of ``values`` given at integer ``nodes`` along ``axis`` onto 0..n-1."""
+    if nodes.size == 1:
+        return np.repeat(values, n, axis=axis)
+    x = np.arange(n, dtype=float)
+    i = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, nodes.size - 2)
+    t = (x - nodes[i]) / (nodes[i + 1] - nodes[i])
+    shape = [1] * values.ndim
+    shape[axis] = n
+    t = t.reshape(shape)
+    return np.take(values, i, axis=axis) * (1 - t) + np.take(values, i + 1, axis=axis) * t
 
 
 def _light_at(lt, P):
@@ -676,8 +734,11 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     camera : PinholeCamera
         Must be in front of the plate (z > 0) and look towards it.
     lights : DirectionalLight / PointLight or a sequence of them
-    environment : UniformEnvironment, optional
-        Uniform spectral sky (reflected through the paint's albedo; seen behind the plate).
+    environment : UniformEnvironment or LatLongEnvironment, optional
+        Uniform spectral sky (reflected through the paint's albedo) or a spectral lat-long
+        map (non-Dirac terms integrated over 8 × 16 cells of the upper hemisphere on a
+        4×-coarser grid; the smooth coat's mirror image of the map at full resolution);
+        seen behind the plate.
     wavelength_nm : (L,) grid, default 380–780 nm every 5 nm (81 wavelengths).
     glint_spread_deg : float
         Standard deviation of the flakes' mirror lobe (light source angular size, flake
@@ -722,7 +783,8 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
             f"(plate {plate.size_mm[0]:g} x {plate.size_mm[1]:g} mm centred on the origin) or widen fov_deg"
         )
     spectra = [lt.spectral(w) for lt in lights]
-    env = environment.spectral(w) if environment is not None else None
+    env = environment.spectral(w) if isinstance(environment, UniformEnvironment) else None
+    envmap = environment if isinstance(environment, LatLongEnvironment) else None
 
     # --- smooth part on a coarse grid of pixels
     brdf = plate.smooth_brdf
@@ -743,7 +805,10 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     if env is not None:
         coarse += brdf.albedo(w, wo) * env[None, :]
     coarse[~chit] = 0.0
-    coarse = coarse.reshape(rows.size, cols.size, L).astype(np.float32)
+    coarse = coarse.reshape(rows.size, cols.size, L)
+    if envmap is not None:
+        coarse += _envmap_smooth(brdf, w, envmap, wo.reshape(rows.size, cols.size, 3), chit.reshape(rows.size, cols.size))
+    coarse = coarse.astype(np.float32)
     if rows.size == 1:
         coarse = np.concatenate([coarse, coarse], axis=0)
         rows = np.r_[rows, rows + 1]
@@ -762,10 +827,21 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     # --- off-plate pixels
     bg = background if background is not None else env
     off = ~on
-    if bg is None:
+    if bg is None and envmap is not None:
+        img[off] = envmap.lookup(w, dirs[off]).astype(np.float32)
+    elif bg is None:
         img[off] = 0.0
     else:
         img[off] = np.asarray(bg, np.float32)[None, :]
+
+    # --- mirror reflection of an environment map in a smooth coat (the coat's Dirac)
+    if envmap is not None and hasattr(brdf, "specular_reflectance"):
+        Fc = brdf.specular_reflectance(w, wo).reshape(coarse.shape)
+        if np.any(Fc > 0):
+            mirror = dirs * np.array([1.0, 1.0, -1.0])  # view ray mirrored at the plate
+            env_flat = envmap._on(w).reshape(-1, L)
+            _mirror_env(img, np.ascontiguousarray(Fc, np.float32), ri.astype(np.int64), rf, ci.astype(np.int64), cf,
+                        envmap.texel(mirror), on, np.ascontiguousarray(env_flat, np.float32))
 
     # --- mirror images of finite-size lights in a smooth clear coat (the coat's Dirac)
     if hasattr(plate.smooth_brdf, "specular_reflectance"):
@@ -785,6 +861,9 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
         white += s[0] * sp / np.pi
     if env is not None:
         white += env
+    if envmap is not None:
+        qd, qs, qr = envmap.upper_quadrature(w)
+        white += (qs * qd[:, 2]) @ qr / np.pi
     meta = {"plate": repr(plate), "glint_spread_deg": sig, "n_glints": int(n_glints), "coarse_step": step}
     return SpectralImage(w, img, on, white, camera, meta)
 
