@@ -12,6 +12,8 @@ the commands that run it, and the reports a person reads.
 - :mod:`~nmmm.recipes.demo` — :func:`run_demo`: the seed paper's worked examples in one
   report  (``nmmm demo``).
 - :mod:`~nmmm.recipes.report` — self-contained HTML reports.
+- :mod:`~nmmm.recipes.pairs` — :func:`make_experiment_pairs`: computed image vs photograph ->
+  ``pairs.toml`` for the 2AFC experiment (``nmmm run RECIPE --pair-with PHOTO``).
 
 Shipped recipes (``nmmm run NAME`` accepts their names): gold_ruby_glass, hematite_paint,
 hematite_paint_ethylcellulose, grey_metallic, interference_pigment, hematite_coating_fft.
@@ -27,6 +29,7 @@ def __getattr__(name):  # heavy modules on demand (keeps `import nmmm.recipes` l
         "compute": "nmmm.recipes.run", "run_recipe": "nmmm.recipes.run", "RunResult": "nmmm.recipes.run",
         "compare_recipes": "nmmm.recipes.compare", "load_results": "nmmm.recipes.sweep",
         "run_demo": "nmmm.recipes.demo", "write_report": "nmmm.recipes.report",
+        "make_experiment_pairs": "nmmm.recipes.pairs",
     }
     if name in lazy:
         return getattr(importlib.import_module(lazy[name]), name)
@@ -34,4 +37,4 @@ def __getattr__(name):  # heavy modules on demand (keeps `import nmmm.recipes` l
 
 
 __all__ = ["Recipe", "load_recipe", "parse_recipe", "example_recipes", "example_path", "compute", "run_recipe",
-           "RunResult", "compare_recipes", "load_results", "run_demo", "write_report"]
+           "RunResult", "compare_recipes", "load_results", "run_demo", "write_report", "make_experiment_pairs"]

@@ -31,7 +31,10 @@ def _recipe_path(value: str) -> str:
 @click.option("--set", "overrides", multiple=True, metavar="KEY=VALUE",
               help="Override a recipe key (repeatable), e.g. --set pigment.fraction=0.1.")
 @click.option("--no-progress", is_flag=True, help="Hide progress bars.")
-def run(recipe, output, overrides, no_progress):
+@click.option("--pair-with", "pair_with", default=None, metavar="PHOTO",
+              help="Also write OUTPUT/pairs.toml for 'nmmm experiment serve': the computed image "
+                   "(or colour swatch) beside this photograph of the real plate.")
+def run(recipe, output, overrides, no_progress, pair_with):
     """Run a TOML RECIPE (a path, or a shipped example's name) into an output folder:
     spectra (CSV, NetCDF), CIELAB colours, plots, images and report.html."""
     from nmmm.recipes.run import run_recipe
@@ -39,6 +42,10 @@ def run(recipe, output, overrides, no_progress):
     path = _recipe_path(recipe)
     out = Path(output or f"out-{Path(path).stem}")
     try:
+        if pair_with is not None:  # a bad photograph is reported before the physics runs
+            from nmmm.experiment.pairs import check_image
+
+            check_image(pair_with, what="photograph (--pair-with)")
         if overrides:
             from nmmm.recipes.run import _dump_toml
             from nmmm.recipes.schema import read_toml, set_key
@@ -55,12 +62,18 @@ def run(recipe, output, overrides, no_progress):
             res = run_recipe(_dump_toml(raw), out, progress=not no_progress)
         else:
             res = run_recipe(path, out, progress=not no_progress)
+        if pair_with is not None:
+            from nmmm.recipes.pairs import make_experiment_pairs
+
+            pairs = make_experiment_pairs([(res, pair_with)], out / "pairs.toml", progress=not no_progress)
     except NmmmError as exc:
         raise click.ClickException(str(exc)) from None
     for row in res.colours:
         if row["spectrum"] == res.primary:
             click.echo(f"{res.primary} under {row['illuminant']}: L* = {row['L']:.2f}, a* = {row['a']:.2f}, b* = {row['b']:.2f}")
     click.echo(f"report: {Path(res.files['report']).resolve()}" if "report" in res.files else f"outputs in {out.resolve()}")
+    if pair_with is not None:
+        click.echo(f"pairs: {pairs} (nmmm experiment serve {pairs})")
 
 
 @click.command("demo")
