@@ -177,6 +177,12 @@ def test_bad_requests_get_clear_errors(client):
                            "rt_ms")]:
         r = client.post(url, json=payload)
         assert r.status_code == 400 and word in r.json()["error"], payload
+    # extra (e.g. misspelt) fields are refused, not silently dropped, and nothing is stored
+    r = client.post(url, json={"response_id": str(uuid.uuid4()), "trial_index": 0, "choice": "left", "rt_ms": 1,
+                               "correct": True})
+    assert r.status_code == 422 and "['correct']" in r.json()["error"] and "rt_ms" in r.json()["error"]
+    r = client.post("/api/participants", json={"participant_id": "P2", "consent": True, "age": 40})
+    assert r.status_code == 422 and "['age']" in r.json()["error"]
     r = client.post(url, content=b"{not json", headers={"Content-Type": "application/json"})
     assert r.status_code == 400 and "not valid JSON" in r.json()["error"]
     r = client.post(url, content=b"[1, 2]", headers={"Content-Type": "application/json"})

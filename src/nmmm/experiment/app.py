@@ -28,7 +28,9 @@ What a participant can learn: their own progress, nothing else. Image URLs name 
 and the screen slot only; the JSON never says which slot holds the photograph, nor gives pair
 ids, labels or file names, and the acknowledgement of a response does not say whether it was
 correct. The server accepts no file uploads: JSON bodies are limited to 16 KiB, anything else
-(multipart uploads included) is refused with 413 / 415.
+(multipart uploads included) is refused with 413 / 415, and a JSON body with a field the
+route does not accept (``{"participant_id", "consent", "screen"}`` for participants, the four
+fields above for responses) is refused with 422 naming the field.
 """
 
 from __future__ import annotations
@@ -125,7 +127,9 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
     def ok(payload, status=200):
         return JSONResponse(payload, status_code=status, headers={"Cache-Control": "no-store"})
 
-    async def read_json(request: Request) -> dict:
+    async def read_json(request: Request, accepted: tuple) -> dict:
+        """The JSON object of a request; keys outside ``accepted`` are refused (422), so a
+        misspelt field (``rt`` for ``rt_ms``) is not silently dropped."""
         ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
         length = request.headers.get("content-length")
         if length is not None and length.isdigit() and int(length) > MAX_BODY_BYTES:
@@ -146,6 +150,10 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
             raise HTTPProblem(400, f"request body is not valid JSON: {exc}") from None
         if not isinstance(data, dict):
             raise HTTPProblem(400, "request body must be a JSON object")
+        extra = sorted(set(data) - set(accepted))
+        if extra:
+            raise HTTPProblem(422, f"unknown field(s) {extra} in the request body; this route accepts only "
+                                   f"{list(accepted)}")
         return data
 
     async def session_of(request: Request) -> dict:
@@ -178,7 +186,7 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
         })
 
     async def create_participant(request):
-        data = await read_json(request)
+        data = await read_json(request, ("participant_id", "consent", "screen"))
         pid = data.get("participant_id")
         if not isinstance(pid, str) or not _PARTICIPANT_RE.match(pid.strip()):
             raise HTTPProblem(400, "participant_id must be 1-64 characters: letters, digits, '.', '_' or '-'")
@@ -237,7 +245,7 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
 
     async def respond(request):
         part = await session_of(request)
-        data = await read_json(request)
+        data = await read_json(request, ("response_id", "trial_index", "choice", "rt_ms"))
         rid = data.get("response_id")
         try:
             rid = str(uuid.UUID(str(rid)))
