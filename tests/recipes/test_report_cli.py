@@ -114,7 +114,7 @@ def test_cli_run_and_sweep_and_errors(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(p.read_text().replace("thickness_nm = 120", "thickness_nm = -120", 1))
     r = runner.invoke(cli.run, [str(bad), "-o", str(tmp_path / "bad"), "--no-progress"])
-    assert r.exit_code != 0 and "thin_film.layers[1].thickness_nm: must be > 0" in r.output
+    assert r.exit_code != 0 and "thin_film.layers[1].thickness_nm: must be a finite number > 0" in r.output
     r = runner.invoke(cli.run, ["no_such_recipe", "--no-progress"])
     assert r.exit_code != 0 and "shipped" in r.output
 

@@ -31,7 +31,7 @@ def _err(raw) -> str:
         ("pigment.fraction", 7, "pigment.fraction: must be in [0, 1]"),
         ("pigment.fraction", -0.1, "pigment.fraction: must be in [0, 1]"),
         ("pigment.fraction", float("nan"), "pigment.fraction: must be in [0, 1]"),
-        ("film.thickness_nm", -5.0, "film.thickness_nm: must be > 0"),
+        ("film.thickness_nm", -5.0, "film.thickness_nm: must be a finite number > 0"),
         ("film.solver", "monte-carlo", "film.solver"),
         ("film.substrate_reflectance", 1.5, "film.substrate_reflectance: must be in [0, 1]"),
         ("pigment.compound", "haematite", "pigment.compound: unknown compound 'haematite' (did you mean 'hematite'?)"),
@@ -44,6 +44,10 @@ def _err(raw) -> str:
         ("pigment.size_spread", 0.5, "pigment.size_spread"),
         ("pigment.diameter_nm", 200.0, "pigment: a cube pigment is sized by edge_nm or body_diagonal_nm; got"),
         ("pigment.shape", "rod", "pigment: a rod pigment is sized by diameter_nm + length_nm"),
+        # no silent coercion or unbounded values
+        ("pigment.fraction", "0.05", "pigment.fraction: Input should be a valid number"),
+        ("pigment.fraction", True, "pigment.fraction: Input should be a valid number"),
+        ("film.thickness_nm", float("inf"), "film.thickness_nm: must be a finite number > 0; got inf"),
     ],
 )
 def test_invalid_values_name_the_key(key, value, expected):
@@ -63,6 +67,14 @@ def test_level_errors_name_the_level_key():
     assert "levels[0].inclusions[0]: shape 'spheroid' needs aspect_ratio" in msg
     msg = _err(set_key(raw, "plate.compound", "ruby"))
     assert msg.startswith("plate.compound: unknown compound 'ruby'")
+
+
+def test_image_keys_are_bounded():
+    raw = fast_raw("grey_metallic")
+    assert "image.pixels[0]: Input should be less than or equal to 4096" in _err(set_key(raw, "image.pixels", [10**5, 20]))
+    assert "image.pixels[1]: Input should be greater than or equal to 1" in _err(set_key(raw, "image.pixels", [30, 0]))
+    assert _err(set_key(raw, "image.light_position_cm", [0, 0, -10])).startswith(
+        "image: light_position_cm must be finite and above the plate")
 
 
 def test_compound_needs_exactly_one_source():

@@ -70,8 +70,8 @@ def _fraction(v: float) -> float:
 
 
 def _positive(v: float) -> float:
-    if not (isinstance(v, (int, float)) and v > 0 and not math.isnan(v)):
-        raise ValueError(f"must be > 0; got {v!r}")
+    if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+        raise ValueError(f"must be a finite number > 0; got {v!r}")
     return float(v)
 
 
@@ -101,7 +101,9 @@ AspecularDeg = Annotated[float, AfterValidator(_aspecular)]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # strict: no silent coercion of TOML types ("0.05" or true for a fraction, "20" for a
+    # thickness are refused naming the key); ints are still accepted for floats
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
 class Spectral(_Strict):
@@ -326,7 +328,8 @@ class Image(_Strict):
     distance_cm: Positive = 40.0
     eye_separation_cm: Positive = 6.5
     light_position_cm: list[float] = Field(default_factory=lambda: [0.0, 20.0, 35.0], min_length=3, max_length=3)
-    pixels: list[int] = Field(default_factory=lambda: [150, 100], min_length=2, max_length=2)
+    pixels: list[Annotated[int, Field(ge=1, le=4096)]] = Field(default_factory=lambda: [150, 100], min_length=2,
+                                                               max_length=2)  # [width, height]
     stereo: bool = True
     exposure: Positive = 1.0
     #: "auto": nmmm.appearance.render with discrete flakes (glints) when installed, else
@@ -336,6 +339,13 @@ class Image(_Strict):
     flake_diameter_um: Positive = 15.0
     fov_deg: Annotated[float, Field(gt=1.0, lt=120.0)] = 25.0
     seed: int = 0
+
+    @model_validator(mode="after")
+    def _light_above(self):
+        if not (all(math.isfinite(c) for c in self.light_position_cm) and self.light_position_cm[2] > 0):
+            raise ValueError(f"light_position_cm must be finite and above the plate (z > 0 cm, the plate lies in "
+                             f"z = 0); got {self.light_position_cm}")
+        return self
 
 
 class Lighting(_Strict):
