@@ -94,7 +94,7 @@ def _shape(inc):
     return Shape.ellipsoid(*inc.semi_axes_nm)
 
 
-def _fft_level(lev, host, inc_mat, w):
+def _fft_level(lev, host, inc_mat, w, progress=None):
     from nmmm.homogenize import homogenize
     from nmmm.microstructure import boolean_spheres, hardcore_spheres
 
@@ -107,13 +107,13 @@ def _fft_level(lev, host, inc_mat, w):
         cell = boolean_spheres(shape, ms.voxel_nm, inc.radius_nm, fraction=inc.fraction, seed=ms.seed)
     lo, hi = float(w[0]), float(w[-1])
     nodes = np.unique(np.r_[np.arange(lo, hi, lev.fft_step_nm), hi])
-    return homogenize(cell, {0: host, 1: inc_mat}, wavelength_nm=nodes, name=lev.name)
+    return homogenize(cell, {0: host, 1: inc_mat}, wavelength_nm=nodes, name=lev.name, progress=progress)
 
 
-def build_materials(recipe: Recipe, wavelength_nm=None) -> dict:
+def build_materials(recipe: Recipe, wavelength_nm=None, progress: bool | None = None) -> dict:
     """Compounds and level results as :class:`~nmmm.materials.Material` objects, in
     recipe order; a database key, file or model error is a :class:`RecipeError` naming the
-    compound's key."""
+    compound's key. ``progress``: the FFT levels' progress bar (None: shown for long solves)."""
     from nmmm.ema.mix import Inclusion, mix
 
     w = _grid(recipe) if wavelength_nm is None else wavelength_nm
@@ -129,7 +129,7 @@ def build_materials(recipe: Recipe, wavelength_nm=None) -> dict:
     for i, lev in enumerate(recipe.levels):
         try:
             if lev.method == "fft":
-                mats[lev.name] = _fft_level(lev, mats[lev.host], mats[lev.inclusions[0].compound], w)
+                mats[lev.name] = _fft_level(lev, mats[lev.host], mats[lev.inclusions[0].compound], w, progress)
             else:
                 incs = [Inclusion(mats[inc.compound], inc.fraction, _shape(inc), inc.radius_nm) for inc in lev.inclusions]
                 mats[lev.name] = mix(mats[lev.host], incs, method=lev.method, name=lev.name)
@@ -404,7 +404,7 @@ def compute(recipe: Recipe, recipe_text: str = "", progress: bool = True) -> Run
         bar.set_postfix_str(step)
         t0 = time.perf_counter()
         if step == "compounds and levels":
-            mats = build_materials(recipe, w)
+            mats = build_materials(recipe, w, progress=None if progress else False)
             for k, m in mats.items():
                 res.materials[k] = np.asarray(m.nk(w))
         elif step == "colours":
