@@ -54,7 +54,7 @@ def compare_results(res_a, res_b, illuminants=None, observer: str = "2") -> list
                 continue
             la = np.array([ra["L"], ra["a"], ra["b"]])
             lb = np.array([rb["L"], rb["a"], rb["b"]])
-            rows.append({"geometry": f"aspecular {ra['aspecular_deg']:g}° (45° illumination)", "illuminant": ra["illuminant"],
+            rows.append({"geometry": f"aspecular {ra['aspecular_deg']:g}° ({res_a.recipe.viewing.illumination_deg:g}° illumination)", "illuminant": ra["illuminant"],
                          "L_A": la[0], "a_A": la[1], "b_A": la[2], "L_B": lb[0], "a_B": lb[1], "b_B": lb[2],
                          "dE00": float(delta_e2000(la, lb))})
     return rows

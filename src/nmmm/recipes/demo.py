@@ -75,12 +75,12 @@ def _hematite_series(path, out, sec, progress):
                out / "fraction_series", serial=True, progress=progress)
     gs = sweep(path, [("pigment.body_diagonal_nm", list(HEMATITE_DIAGONALS_NM))], out / "grain_size_series",
                serial=True, progress=progress)
-    cols = lambda df, p, unit: [{f"{p.split('.')[-1]}{unit}": r[f"param:{p}"], "L": r["L_D65"], "a": r["a_D65"],
-                                 "b": r["b_D65"]} for _, r in df.iterrows()]
+    cols = lambda df, p, head: [{head: r[f"param:{p}"], "L": r["L_D65"], "a": r["a_D65"], "b": r["b_D65"]}
+                                for _, r in df.iterrows()]
     sec["tables"]["Volume fraction series (CIELAB, D65)"] = [
         {"fraction (1)": r["param:pigment.fraction"], "packing (Percus-Yevick)": bool(r["param:pigment.dependent_scattering"]),
          "L": r["L_D65"], "a": r["a_D65"], "b": r["b_D65"]} for _, r in fr["results"].iterrows()]
-    sec["tables"]["Grain-size series at 7 % (CIELAB, D65)"] = cols(gs["results"], "pigment.body_diagonal_nm", "")
+    sec["tables"]["Grain-size series at 7 % (CIELAB, D65)"] = cols(gs["results"], "pigment.body_diagonal_nm", "body diagonal (nm)")
     sec["figures"] += [fr.get("plot"), gs.get("plot")]
     L = list(gs["results"]["L_D65"])
     trend = "darker" if L[-1] < max(L) else "not darker"

@@ -257,6 +257,16 @@ def _varies_list(varies):
     return [parse_vary(v) if isinstance(v, str) else v for v in varies]
 
 
+def _axis_label(key: str) -> str:
+    """``pigment.body_diagonal_nm`` -> ``pigment.body_diagonal (nm)``; ``L_D65`` -> ``L* under D65 (1)``."""
+    for suffix, unit in (("_nm", "nm"), ("_um", "µm"), ("_deg", "°"), ("_cm", "cm")):
+        if key.endswith(suffix):
+            return f"{key[:-len(suffix)]} ({unit})"
+    if key[:2] in ("L_", "a_", "b_"):
+        return f"{key[0]}* under {key[2:]} (1)"
+    return f"{key} (1)" if key.endswith("fraction") else key
+
+
 def plot_sweep(df, path, quantity: str | None = None):
     """L* (first illuminant) against the first varied parameter, one curve per value of
     the second; and the spectra of every point."""
@@ -272,8 +282,8 @@ def plot_sweep(df, path, quantity: str | None = None):
     groups = df.groupby(params[1]) if len(params) > 1 else [(None, df)]
     for val, g in groups:
         a1.plot(g[x], g[qty], "o-", label=f"{params[1][6:]} = {val}" if val is not None else None)
-    a1.set_xlabel(x[6:])
-    a1.set_ylabel(f"{qty} (1)" if qty else "")
+    a1.set_xlabel(_axis_label(x[6:]))
+    a1.set_ylabel(_axis_label(qty) if qty else "")
     if len(params) > 1:
         a1.legend(fontsize=7)
     a1.grid(alpha=0.3)
