@@ -10,7 +10,7 @@ from PIL import Image
 from nmmm.errors import RecipeError
 from nmmm.experiment.pairs import load_pairs
 from nmmm.recipes.pairs import make_experiment_pairs
-from nmmm.recipes.run import _dump_toml, run_recipe
+from nmmm.recipes.run import run_recipe
 
 from .conftest import fast_raw
 
@@ -25,18 +25,8 @@ def _png(path):
     return np.asarray(Image.open(path).convert("RGB"), int)
 
 
-@pytest.fixture(scope="module")
-def metallic(tmp_path_factory):
-    """grey_metallic (30 x 20 px stereo pair) run once by `run_recipe`, as a recipe file."""
-    d = tmp_path_factory.mktemp("metallic")
-    recipe = d / "grey.toml"
-    recipe.write_text(_dump_toml(fast_raw("grey_metallic", step_nm=40.0)))
-    res = run_recipe(str(recipe), d / "out", progress=False)
-    return recipe, res
-
-
-def test_rendered_recipe_pairs_load_and_match_the_run_image(metallic, tmp_path):
-    recipe, res = metallic
+def test_rendered_recipe_pairs_load_and_match_the_run_image(grey_metallic_run, tmp_path):
+    recipe, res, _ = grey_metallic_run
     photo = _photo(tmp_path / "plate.jpg", (300, 200))  # same 3:2 aspect as the 30 x 20 render
     out = make_experiment_pairs([(str(recipe), photo, "grey metallic"), (res, photo)], tmp_path / "exp" / "pairs.toml",
                                 progress=False, repetitions=2)
@@ -61,8 +51,8 @@ def test_recipe_without_image_gives_a_swatch_of_its_colour(tmp_path):
                                atol=1)
 
 
-def test_aspect_mismatch_names_image_pixels(metallic, tmp_path):
-    recipe, res = metallic
+def test_aspect_mismatch_names_image_pixels(grey_metallic_run, tmp_path):
+    recipe, res, _ = grey_metallic_run
     with pytest.raises(RecipeError, match=r"image\.pixels.*30x20.*100x100"):
         make_experiment_pairs([(res, _photo(tmp_path / "sq.png", (100, 100)))], tmp_path / "p.toml", progress=False)
     with pytest.raises(RecipeError, match="no rendered view 'top'"):
@@ -72,10 +62,10 @@ def test_aspect_mismatch_names_image_pixels(metallic, tmp_path):
         make_experiment_pairs([str(recipe)], tmp_path / "p.toml", progress=False)
 
 
-def test_cli_run_pair_with(metallic, tmp_path):
+def test_cli_run_pair_with(grey_metallic_run, tmp_path):
     from nmmm.recipes.cli import run
 
-    recipe, res = metallic
+    recipe, res, _ = grey_metallic_run
     photo = _photo(tmp_path / "plate.png", (60, 40))
     r = CliRunner().invoke(run, [str(recipe), "-o", str(tmp_path / "o"), "--no-progress", "--pair-with", str(photo)])
     assert r.exit_code == 0, r.output

@@ -37,10 +37,8 @@ def _open_in_chromium(path: Path):
 
 @pytest.mark.browser
 @pytest.mark.skipif(not os.path.exists(CHROMIUM), reason="needs Debian's chromium at /usr/bin/chromium")
-def test_report_opens_in_chromium_and_shows_its_images(tmp_path):
-    from nmmm.recipes.run import run_recipe
-
-    res = run_recipe(fast_raw("grey_metallic", step_nm=40.0), tmp_path, progress=False)
+def test_report_opens_in_chromium_and_shows_its_images(grey_metallic_run):
+    _, res, _ = grey_metallic_run
     html = Path(res.files["report"]).read_text()
     assert "src=\"http" not in html and "<script src" not in html  # self-contained
     errors, widths, text = _open_in_chromium(Path(res.files["report"]))
@@ -74,9 +72,9 @@ def test_demo_quick_only_succeeds(tmp_path):
 def test_compare_same_recipe_is_zero_and_matches_colour_science(tmp_path):
     import colour
 
-    from nmmm.recipes.compare import compare_recipes
+    from nmmm.recipes.compare import compare_recipes, compare_results
 
-    a = fast_raw("hematite_paint", step_nm=20.0)
+    a = fast_raw("hematite_paint", step_nm=40.0)
     b = set_key(a, "pigment.body_diagonal_nm", 600.0)  # grain-size substitution
     out = compare_recipes(a, b, tmp_path, illuminants=["D65", "A"], progress=False)
     rows = [r for r in out["rows"] if r["illuminant"] == "D65"]
@@ -86,8 +84,8 @@ def test_compare_same_recipe_is_zero_and_matches_colour_science(tmp_path):
     assert rows[0]["dE00"] > 0.1
     assert {r["illuminant"] for r in out["rows"]} == {"D65", "A"}
     assert Path(out["report"]).exists() and (tmp_path / "spectra_overlay.png").exists()
-    same = compare_recipes(a, a, tmp_path / "same", progress=False)
-    assert all(abs(r["dE00"]) < 1e-9 for r in same["rows"])
+    same = compare_results(out["a"], out["a"], ["D65", "A"])
+    assert {r["illuminant"] for r in same} == {"D65", "A"} and all(abs(r["dE00"]) < 1e-9 for r in same)
 
 
 def test_cli_run_and_sweep_and_errors(tmp_path):
