@@ -72,7 +72,7 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
     import matplotlib.pyplot as plt
 
     from nmmm.recipes.report import result_section, write_report
-    from nmmm.recipes.run import run_recipe
+    from nmmm.recipes.run import _finish, _spectrum_axes, run_recipe
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -82,14 +82,8 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
     fig, ax = plt.subplots(figsize=(7, 4))
     ax.plot(a.wavelength_nm, a.spectra[a.primary], lw=2, label=f"A: {a.recipe.name} — {a.primary}")
     ax.plot(b.wavelength_nm, b.spectra[b.primary], lw=2, ls="--", label=f"B: {b.recipe.name} — {b.primary}")
-    ax.set_xlabel("wavelength (nm)")
-    ax.set_ylabel("reflectance / transmittance (1)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    overlay = out / "spectra_overlay.png"
-    fig.savefig(overlay, dpi=110)
-    plt.close(fig)
+    _spectrum_axes(ax, [a.primary, b.primary])
+    overlay = _finish(fig, out / "spectra_overlay.png")
     figs = [str(overlay)]
     if a.images and b.images:
         from PIL import Image

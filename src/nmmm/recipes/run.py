@@ -542,6 +542,29 @@ def _write_netcdf(res, path):
     return path
 
 
+def _finish(fig, path):
+    """Lay out, save (110 dpi PNG) and close a figure; return its path."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _spectrum_axes(ax, labels):
+    """Wavelength axis, a y label naming the kinds of spectra plotted (unit 1), grid, legend."""
+    def kind(label):
+        label = str(label).split(" — ")[-1]
+        return next((q for q in ("reflectance factor", "reflectance", "transmittance") if label.startswith(q)), label)
+
+    kinds = list(dict.fromkeys(kind(k) for k in labels))
+    ax.set_xlabel("wavelength (nm)")
+    ax.set_ylabel(" / ".join(kinds) + " (1)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+
+
 def _plots(res, out):
     import matplotlib
 
@@ -553,16 +576,9 @@ def _plots(res, out):
     fig, ax = plt.subplots(figsize=(7, 4))
     for k, v in res.spectra.items():
         ax.plot(w, v, lw=2 if k == res.primary else 1.2, label=k)
-    ax.set_xlabel("wavelength (nm)")
-    ax.set_ylabel("reflectance / transmittance (1)")
+    _spectrum_axes(ax, list(res.spectra))
     ax.set_title(res.recipe.name)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    p = out / "spectra.png"
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
-    files["spectra plot"] = p
+    files["spectra plot"] = _finish(fig, out / "spectra.png")
     if res.materials:
         fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6))
         for k, nk in res.materials.items():
@@ -576,11 +592,7 @@ def _plots(res, out):
             a.grid(alpha=0.3)
         a1.legend(fontsize=7)
         fig.suptitle("Optical constants of the compounds and levels")
-        fig.tight_layout()
-        p = out / "nk.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        files["nk plot"] = p
+        files["nk plot"] = _finish(fig, out / "nk.png")
     if res.multiangle:
         fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6))
         g = [r["aspecular_deg"] for r in res.multiangle]
@@ -595,11 +607,7 @@ def _plots(res, out):
         for a in (a1, a2):
             a.grid(alpha=0.3)
         fig.suptitle(f"Multi-angle colour ({res.multiangle[0]['illuminant']})")
-        fig.tight_layout()
-        p = out / "multiangle.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        files["multiangle plot"] = p
+        files["multiangle plot"] = _finish(fig, out / "multiangle.png")
     return files
 
 

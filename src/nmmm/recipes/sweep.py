@@ -295,7 +295,6 @@ def plot_sweep(df, path, quantity: str | None = None):
     a2.grid(alpha=0.3)
     if len(df) <= 12:
         a2.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    from nmmm.recipes.run import _finish
+
+    return _finish(fig, path)
