@@ -115,6 +115,14 @@ def test_cli_run_and_sweep_and_errors(tmp_path):
     assert r.exit_code != 0 and "thin_film.layers[1].thickness_nm: must be a finite number > 0" in r.output
     r = runner.invoke(cli.run, ["no_such_recipe", "--no-progress"])
     assert r.exit_code != 0 and "shipped" in r.output
+    # an output folder that cannot be made, a malformed --set: usage errors (exit 2), no traceback
+    for cmd, args in [(cli.run, [str(p), "-o", str(bad / "x")]), (cli.demo, ["-o", str(bad), "--quick"]),
+                      (cli.compare, [str(p), str(p), "-o", str(bad)]),
+                      (cli.sweep, [str(p), "--vary", "thin_film.layers[1].thickness_nm=90", "-o", str(bad)])]:
+        r = runner.invoke(cmd, args + ["--no-progress"])
+        assert r.exit_code == 2 and "cannot create the output folder" in r.output, (cmd.name, r.output)
+    r = runner.invoke(cli.run, [str(p), "--set", "=3", "-o", str(tmp_path / "o3"), "--no-progress"])
+    assert r.exit_code == 2 and "'--set': '=3': empty key" in r.output
 
 
 def test_top_level_cli_maps_the_commands():

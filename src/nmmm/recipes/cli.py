@@ -11,6 +11,17 @@ import click
 from nmmm.errors import NmmmError
 
 
+def _output_dir(value) -> Path:
+    """Create the output folder now, so that an unwritable path is a clear error, not a traceback."""
+    out = Path(value)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise click.BadParameter(f"cannot create the output folder {str(out)!r}: {exc.strerror or exc}",
+                                 param_hint="'-o' / '--output'") from None
+    return out
+
+
 def _recipe_path(value: str) -> str:
     """A recipe path, or the name of a shipped example (``hematite_paint``)."""
     if Path(value).exists():
@@ -46,6 +57,7 @@ def run(recipe, output, overrides, no_progress, pair_with):
             from nmmm.experiment.pairs import check_image
 
             check_image(pair_with, what="photograph (--pair-with)")
+        _output_dir(out)
         if overrides:
             from nmmm.recipes.run import _dump_toml
             from nmmm.recipes.schema import read_toml, set_key
@@ -53,7 +65,10 @@ def run(recipe, output, overrides, no_progress, pair_with):
 
             raw, _, base = read_toml(path)
             for ov in overrides:
-                key, vals = parse_vary(ov)
+                try:
+                    key, vals = parse_vary(ov)
+                except NmmmError as exc:
+                    raise click.BadParameter(str(exc).replace("--vary ", "", 1), param_hint="'--set'") from None
                 raw = set_key(raw, key, vals[0] if len(vals) == 1 else vals)
             if base is not None:  # relative 'file' paths stay relative to the recipe
                 for spec in raw.get("compounds", {}).values():
@@ -85,7 +100,7 @@ def demo(output, quick, only, no_progress):
     """Run the seed paper's worked examples into one HTML report."""
     from nmmm.recipes.demo import run_demo
 
-    report, failed, skipped = run_demo(output, quick=quick, only=only or None, progress=not no_progress)
+    report, failed, skipped = run_demo(_output_dir(output), quick=quick, only=only or None, progress=not no_progress)
     click.echo(f"report: {Path(report).resolve()}")
     if skipped:
         click.echo("not available: " + ", ".join(skipped))
@@ -106,7 +121,7 @@ def compare(recipe_a, recipe_b, illuminants, output, no_progress):
     from nmmm.recipes.compare import compare_recipes
 
     try:
-        r = compare_recipes(_recipe_path(recipe_a), _recipe_path(recipe_b), output, list(illuminants) or None,
+        r = compare_recipes(_recipe_path(recipe_a), _recipe_path(recipe_b), _output_dir(output), list(illuminants) or None,
                             progress=not no_progress)
     except NmmmError as exc:
         raise click.ClickException(str(exc)) from None
@@ -133,7 +148,7 @@ def sweep(recipe, varies, scheduler, n_workers, serial, output, no_progress):
     from nmmm.recipes.sweep import sweep as run_sweep
 
     path = _recipe_path(recipe)
-    out = Path(output or f"sweep-{Path(path).stem}")
+    out = _output_dir(output or f"sweep-{Path(path).stem}")
     try:
         s = run_sweep(path, list(varies), out, scheduler=scheduler, n_workers=n_workers, serial=serial,
                       progress=not no_progress)

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nmmm.errors import RecipeError
+from nmmm.errors import InvalidInputError, RecipeError
 from nmmm.recipes.schema import get_key, parse_recipe, read_toml, set_key
 
 __all__ = ["parse_vary", "grid_points", "point_id", "evaluate_point", "sweep", "load_results", "SweepSummary"]
@@ -199,7 +199,13 @@ def sweep(recipe, varies, out_dir, scheduler=None, n_workers: int = 2, serial: b
         try:
             if client is None:
                 if scheduler:
-                    client = own_client = Client(scheduler)
+                    try:
+                        client = own_client = Client(scheduler)
+                    except (OSError, TimeoutError, ValueError) as exc:
+                        raise InvalidInputError(
+                            f"scheduler {scheduler!r}: no Dask scheduler could be reached ({exc}); start one with "
+                            "'dask scheduler' (and workers with 'dask worker ADDRESS'), give its tcp://HOST:8786 "
+                            "address, or leave --scheduler out for a local cluster") from None
                 else:
                     import logging
 
