@@ -29,6 +29,7 @@ COLUMN_UNITS = {
     "L": "L* (1)", "a": "a* (1)", "b": "b* (1)", "C": "C*ab (1)", "h_deg": "h_ab (°)",
     "aspecular_deg": "aspecular angle (°)", "illuminant": "illuminant", "spectrum": "spectrum",
     "dE00": "ΔE00 (1)", "delta_e2000": "ΔE00 (1)",
+    "L_A": "L* A (1)", "a_A": "a* A (1)", "b_A": "b* A (1)", "L_B": "L* B (1)", "a_B": "a* B (1)", "b_B": "b* B (1)",
 }
 
 _CSS = """
@@ -163,6 +164,20 @@ def write_report(sections, path, title: str = "nmmm report", intro: str = "") ->
     return path
 
 
+def _scalar_label(key: str, primary: str) -> str:
+    """A readable name with its unit for a key of :attr:`RunResult.scalars`."""
+    if key[:2] in ("L_", "a_", "b_"):
+        return f"{key[0]}* of {primary}, {key[2:]} (1)"
+    if key == "mean_primary":
+        return f"mean of {primary} over wavelength (1)"
+    if key == "flop_index":
+        return "flop index, Alman 1987 (1)"
+    for suffix, unit in (("_nm", "nm"), ("_deg", "°"), ("_s", "s")):
+        if key.endswith(suffix):
+            return f"{key[:-len(suffix)].replace('_', ' ')} ({unit})"
+    return key
+
+
 def result_section(res, title: str | None = None) -> dict:
     """A report section from a :class:`~nmmm.recipes.run.RunResult` (after ``write_outputs``)."""
     r = res.recipe
@@ -174,8 +189,8 @@ def result_section(res, title: str | None = None) -> dict:
     if res.multiangle:
         tables["Multi-angle colour"] = res.multiangle
     if res.scalars:
-        tables["Summary numbers (units in the names; CIELAB in 1)"] = {k: v for k, v in res.scalars.items()}
-    tables["Timings (s)"] = {f"{k} (s)": v for k, v in res.timings_s.items()}
+        tables["Summary numbers"] = {_scalar_label(k, res.primary): v for k, v in res.scalars.items()}
+    tables["Timings (s)"] = {f"{k} (s)": round(float(v), 3) for k, v in res.timings_s.items()}
     sw = [(f"{c['spectrum']} / {c['illuminant']}", c["srgb"]) for c in res.colours]
     text = [r.description] if r.description else []
     text += res.notes
