@@ -133,3 +133,12 @@ def test_top_level_cli_maps_the_commands():
         assert name in r.output
     r = CliRunner().invoke(top, ["sweep", "--help"])
     assert "--vary" in r.output and "--scheduler" in r.output
+
+
+def test_report_writes_complex_numbers_as_a_reader_would():
+    """Packages' tables hold permittivities; the report shows 'a + bi', not Python's '(a+bj)'."""
+    from nmmm.recipes.report import _fmt
+
+    assert _fmt(2.80509 + 0.14491j) == "2.805 + 0.145i"
+    assert _fmt("(2.80509-0.14491j)") == "2.805 − 0.145i"  # as read back from a CSV table
+    assert _fmt("(not complex)") == "(not complex)"

@@ -57,6 +57,14 @@ def _img(path) -> str:
 
 
 def _fmt(v) -> str:
+    if isinstance(v, str) and v.startswith("(") and v.endswith("j)"):  # a complex number read back from CSV
+        try:
+            v = complex(v)
+        except ValueError:
+            pass
+    if isinstance(v, (complex, np.complexfloating)):
+        v = complex(v)
+        return f"{_fmt(v.real)} {'−' if v.imag < 0 else '+'} {_fmt(abs(v.imag))}i"
     if isinstance(v, (float, np.floating)):
         v = float(v)
         if v != 0 and (abs(v) >= 1e5 or abs(v) < 1e-3):
