@@ -142,3 +142,14 @@ def test_report_writes_complex_numbers_as_a_reader_would():
     assert _fmt(2.80509 + 0.14491j) == "2.805 + 0.145i"
     assert _fmt("(2.80509-0.14491j)") == "2.805 − 0.145i"  # as read back from a CSV table
     assert _fmt("(not complex)") == "(not complex)"
+
+
+def test_report_keeps_text_tables_aligned(tmp_path):
+    """A hook's plain-text table (aligned columns) is shown preformatted, prose as paragraphs."""
+    from nmmm.recipes.report import write_report
+
+    table = "observer  k/n    Pc\nS01       12/20  60.0\nS02       11/20  55.0"
+    p = write_report([{"title": "t", "text": "Prose that\nwraps.\n\n" + table}], tmp_path / "r.html", title="t")
+    html = p.read_text()
+    assert "<pre class='texttable'>observer  k/n    Pc\nS01       12/20  60.0" in html
+    assert "<p>Prose that\nwraps.</p>" in html

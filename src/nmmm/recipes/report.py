@@ -43,7 +43,7 @@ th{background:#f2f2f2} td:first-child,th:first-child{text-align:left}
 .ok{color:#060} .failed{color:#c00;font-weight:bold}
 .swatch{display:inline-block;width:90px;margin:.3em;font-size:.72em;text-align:center;vertical-align:top}
 .swatch div{height:50px;border:1px solid #999}
-details pre{background:#f7f7f7;padding:.6em;overflow:auto;font-size:.8em}
+details pre,pre.texttable{background:#f7f7f7;padding:.6em;overflow:auto;font-size:.8em}
 .meta{color:#666;font-size:.85em}
 """
 
@@ -121,7 +121,12 @@ def _section_html(s: dict, idx: int) -> str:
         parts.append(f"<div class='error'>{html.escape(str(s['error']))}</div>")
     for para in ([s["text"]] if isinstance(s.get("text"), str) else s.get("text") or []):
         for p in str(para).split("\n\n"):
-            if p.strip():
+            if not p.strip():
+                continue
+            lines = p.strip("\n").splitlines()
+            if len(lines) > 1 and any("  " in ln.strip() for ln in lines):  # a text table: keep its columns
+                parts.append(f"<pre class='texttable'>{html.escape(p.strip(chr(10)))}</pre>")
+            else:
                 parts.append(f"<p>{html.escape(p.strip())}</p>")
     if s.get("swatches"):
         parts.append(_swatches(s["swatches"]))
