@@ -32,6 +32,7 @@ HEMATITE_FRACTIONS = (0.05, 0.07, 0.10)
 HEMATITE_DIAGONALS_NM = (100.0, 150.0, 250.0, 400.0, 600.0, 1000.0)
 
 HOOKS = (
+    ("Compounds of the seed paper (nmmm.materials)", "nmmm.materials.examples:demo"),
     ("Gold-ruby glass in depth (nmmm.ema)", "nmmm.ema.examples:gold_ruby_demo"),
     ("Hematite paint in depth (nmmm.layers)", "nmmm.layers.examples:hematite_demo"),
     ("Interference pigments in depth (nmmm.layers)", "nmmm.layers.interference:demo"),
