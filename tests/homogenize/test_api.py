@@ -152,6 +152,10 @@ def test_non_periodic_microstructure_refused():
         (np.zeros(8, int), {0: 2.0}, "2-D or 3-D"),
         (np.full((4, 4), 0.5), {0: 2.0}, "integer"),
         (np.r_[np.zeros((2, 4), int), np.ones((2, 4), int)], {0: [1.0, 2.0], 1: [1.0, 2.0, 3.0]}, "lengths"),
+        (np.zeros((4, 4), int), 2.25, "map each label"),
+        (np.zeros((4, 4), int), None, "map each label"),
+        (np.zeros((4, 4), int), "ab", "map each label"),
+        (np.zeros((4, 4), int), {0: np.array([])}, "empty"),
     ],
 )
 def test_bad_input(labels, eps, match):

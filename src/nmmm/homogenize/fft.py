@@ -136,9 +136,13 @@ def _eps_table(values, eps, wavelength_nm=None):
     """Build the (n_wavelengths, n_phases) permittivity table; scalar flag."""
     if hasattr(eps, "items"):
         lookup = dict(eps.items())
+    elif isinstance(eps, (list, tuple, np.ndarray)) and np.ndim(eps) >= 1:
+        lookup = dict(enumerate(eps))
     else:
-        seq = list(eps)
-        lookup = dict(enumerate(seq))
+        raise InvalidInputError(
+            f"eps must map each label to its permittivity, e.g. {{0: 2.25, 1: -50 + 20j}} "
+            f"(or be a sequence indexed by label), got {type(eps).__name__} {eps!r}"
+        )
     missing = [int(v) for v in values if int(v) not in lookup]
     if missing:
         raise InvalidInputError(
@@ -164,6 +168,8 @@ def _eps_table(values, eps, wavelength_nm=None):
                 f"permittivity of label {int(v)} must be a scalar or a 1-D array over wavelength, got shape {a.shape}"
             )
         if a.ndim == 1:
+            if a.size == 0:
+                raise InvalidInputError(f"permittivity of label {int(v)} is an empty array; give one value per wavelength")
             scalar = False
         if not np.all(np.isfinite(a)):
             raise InvalidInputError(f"permittivity of label {int(v)} contains NaN or infinity; give finite values")
