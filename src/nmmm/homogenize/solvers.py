@@ -139,17 +139,31 @@ def _bad(z) -> bool:
     return not np.isfinite(z) or z == 0
 
 
+def _krylov_start(problem: Problem, tab, e0, keep_x: bool, name: str):
+    """Common start of the Krylov solvers on Γ ε x = −Γ ε E0.
+
+    Returns ``(tab, start, b, nb, x, done)``: the phase table in the field's precision, the
+    projection count before the solve, the right-hand side b and its norm, a zero field x, and
+    ``done`` — the finished outcome (E = E0) when b vanishes (a homogeneous medium), else None.
+    """
+    tab = problem.tab(tab)
+    start = problem.projections
+    b = problem.rhs(tab, e0)
+    nb = _norm(b)
+    x = problem.field()
+    scale = float(np.max(np.abs(tab))) * np.sqrt(problem.n)
+    done = None
+    if nb <= 1e-14 * scale:
+        done = SolveOutcome(x if keep_x else None, problem.flux(x, tab, e0), 0, [0.0], True, name)
+    return tab, start, b, nb, x, done
+
+
 # -- COCG -------------------------------------------------------------------------------------
 def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_x=True) -> SolveOutcome:
     """Conjugate orthogonal conjugate gradient on Γ ε x = −Γ ε E0 (van der Vorst & Melissen 1990)."""
-    tab = problem.tab(tab)
-    start = problem.projections
-    r = problem.rhs(tab, e0)
-    nb = _norm(r)
-    scale = float(np.max(np.abs(tab))) * np.sqrt(problem.n)
-    x = problem.field()
-    if nb <= 1e-14 * scale:  # homogeneous medium: E = E0
-        return SolveOutcome(x if keep_x else None, problem.flux(x, tab, e0), 0, [0.0], True, "cocg")
+    tab, start, r, nb, x, done = _krylov_start(problem, tab, e0, keep_x, "cocg")
+    if done is not None:  # homogeneous medium: E = E0
+        return done
     if x0 is not None:
         # seed with γ x0, γ minimising ‖b − γ A x0‖ (never a worse start than x = 0)
         Ax = problem.apply(x0, tab)
@@ -200,14 +214,9 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
 # -- BiCGStab ---------------------------------------------------------------------------------
 def solve_bicgstab(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_x=True) -> SolveOutcome:
     """BiCGStab (van der Vorst 1992) on the Galerkin system; two projections per iteration."""
-    tab = problem.tab(tab)
-    start = problem.projections
-    b = problem.rhs(tab, e0)
-    nb = _norm(b)
-    x = problem.field()
-    scale = float(np.max(np.abs(tab))) * np.sqrt(problem.n)
-    if nb <= 1e-14 * scale:
-        return SolveOutcome(x if keep_x else None, problem.flux(x, tab, e0), 0, [0.0], True, "bicgstab")
+    tab, start, b, nb, x, done = _krylov_start(problem, tab, e0, keep_x, "bicgstab")
+    if done is not None:
+        return done
     r = b
     if x0 is not None:
         x[...] = x0
@@ -262,14 +271,9 @@ def solve_gmres(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep
     """Restarted GMRES (:func:`scipy.sparse.linalg.gmres`) on the Galerkin system."""
     from scipy.sparse.linalg import LinearOperator, gmres
 
-    tab = problem.tab(tab)
-    start = problem.projections
-    b = problem.rhs(tab, e0)
-    nb = _norm(b)
-    x = problem.field()
-    scale = float(np.max(np.abs(tab))) * np.sqrt(problem.n)
-    if nb <= 1e-14 * scale:
-        return SolveOutcome(x if keep_x else None, problem.flux(x, tab, e0), 0, [0.0], True, "gmres")
+    tab, start, b, nb, x, done = _krylov_start(problem, tab, e0, keep_x, "gmres")
+    if done is not None:
+        return done
     shape = (problem.d, problem.n)
     size = problem.d * problem.n
 
