@@ -58,8 +58,23 @@ def test_spectrum_warm_start_matches_cold_start():
     assert all(h[0] == 1.0 for hw in cold.residual_history for h in hw)
 
 
+def test_metal_contrast_solvers_match_hashin_coated_disc():
+    """Core ε = −50 + 20i (aluminium-like), shell 2.25, core fraction 0.3 of the coated disc, in
+    Hashin's ε* (Hashin 1962, 2-D form): every solver reaches ε* within 1.5 % on 32² (measured
+    0.77 %, the staircase error, identical for all solvers)."""
+    ec, es = -50 + 20j, 2.25
+    ref = hashin_value(ec, es, 0.3, ndim=2)
+    lab = G.coated_sphere(32, 0.5, 0.3, ndim=2)
+    for solver in ["cocg", "bicgstab", "gmres", "eyre_milton"]:
+        r = fft_permittivity(lab, {0: ec, 1: es, 2: ref}, solver=solver, fallback=False, tol=1e-8,
+                             directions=[0], maxiter=20000)
+        assert r.tensor[0, 0] == pytest.approx(ref, rel=0.015), solver
+
+
 def test_metal_contrast_converges_and_solvers_agree():
-    """ε = −50 + 20i (aluminium-like) in 2.25: COCG, BiCGStab, GMRES and Eyre-Milton agree."""
+    """ε = −50 + 20i (aluminium-like) in 2.25 on a Boolean model (contacts, corners; no closed
+    form): COCG, BiCGStab, GMRES and Eyre-Milton — different algorithms — agree. The exact
+    reference for the same contrast is the coated-disc test above."""
     lab = G.boolean_spheres(32, 0.3, 4, ndim=2, seed=1)
     vals = {}
     for solver in ["cocg", "bicgstab", "gmres", "eyre_milton"]:
