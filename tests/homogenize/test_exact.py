@@ -80,11 +80,29 @@ def test_checkerboard_complex():
 
 
 # -- Keller (1964) duality in 2-D -------------------------------------------------------------------
-@pytest.mark.parametrize("green", ["continuous", "willot2015"])
-def test_keller_duality(green):
+@pytest.mark.parametrize("green", OPERATORS)
+@pytest.mark.parametrize("e2, tol", [(8 + 3j, 2e-3), (-50 + 20j, 0.03)])
+def test_keller_duality(green, e2, tol):
     """ε_xx(ε1, ε2) · ε_yy(ε2, ε1) = ε1 ε2 for any 2-D two-phase geometry (Keller 1964).
 
-    Measured on a 64² Boolean model of discs: 2.5-2.7 % (first order in the voxel size).
+    64² Boolean model of discs in ε1 = 2.25. Measured deviation: hematite-like 8 + 3i ≤ 8e-4
+    (all operators, 32² and 64²); aluminium-like −50 + 20i 1.3-1.9 %.
+    """
+    lab = G.boolean_spheres(64, 0.4, 6, ndim=2, seed=3)
+    e1 = 2.25
+    a = fft_permittivity(lab, {0: e1, 1: e2}, green=green).tensor
+    b = fft_permittivity(lab, {0: e2, 1: e1}, green=green).tensor
+    assert a[0, 0] * b[1, 1] / (e1 * e2) == pytest.approx(1.0, abs=tol)
+    assert a[1, 1] * b[0, 0] / (e1 * e2) == pytest.approx(1.0, abs=tol)
+
+
+@pytest.mark.parametrize("green", ["continuous", "willot2015"])
+def test_keller_duality_near_plasmonic_contrast(green):
+    """Same identity with ε2/ε1 ≈ −1.3 + 0.4i, close to the corner (plasmonic) singularity.
+
+    Measured deviation 2.2 %, 3.3 %, 3.8 % (spectral) and 1.8 %, 3.1 %, 3.5 % (Willot 2015) at
+    32², 64², 128²: it does not shrink with the voxel size here. Willot 2014 violates the
+    identity by 11-24 % at this contrast (not asserted; a known limitation of that operator).
     """
     lab = G.boolean_spheres(64, 0.4, 6, ndim=2, seed=3)
     e1, e2 = 2.25, -3 + 1j

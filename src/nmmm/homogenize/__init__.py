@@ -30,6 +30,10 @@ Known limitations
   singularities. The metal-dielectric checkerboard has no converging answer on any grid.
 - The rotated (default) operator connects voxels that touch only at a corner; for
   contact-dominated cells compare with ``green="willot2014"``.
+- Near-plasmonic contrasts (ε2/ε1 close to −1, e.g. −3 + i next to 2.25) on cells with
+  corners and contacts: the result does not settle as the grid is refined (Keller duality
+  off by 2-4 % at 32²-128² with the spectral and rotated operators, 11-24 % with
+  ``green="willot2014"``). Dielectric and strongly metallic (−50 + 20i) contrasts are fine.
 - Quasi-static only: features must be small against λ/n (a warning says when not).
 - No GPU backend yet (the kernels are NumPy/Numba; a CuPy port would replace scipy.fft and
   the four kernels).
