@@ -186,6 +186,9 @@ def test_bad_options():
         fft_permittivity(lab, {0: 1, 1: 2}, solver="nope")
     with pytest.raises(InvalidInputError, match="dtype"):
         fft_permittivity(lab, {0: 1, 1: 2}, dtype="float32")
+    for solver in ("cocg", "eyre_milton"):  # Eyre-Milton used to fail with an IndexError
+        with pytest.raises(InvalidInputError, match="maxiter"):
+            fft_permittivity(lab, {0: 1, 1: 2}, solver=solver, maxiter=0)
 
 
 def test_non_convergence_raises_with_history():

@@ -292,6 +292,8 @@ def fft_permittivity(
         tol = 1e-6 if dt == np.complex128 else 1e-5
     if not (0 < tol < 1):
         raise InvalidInputError(f"tol must lie in (0, 1), got {tol}")
+    if isinstance(maxiter, bool) or not isinstance(maxiter, (int, np.integer)) or maxiter < 1:
+        raise InvalidInputError(f"maxiter must be a positive integer (projections per loading), got {maxiter!r}")
     key = str(solver).lower().replace("-", "_")
     if key not in SOLVERS:
         raise InvalidInputError(f"unknown solver {solver!r}; choose one of {sorted(SOLVERS)}")
