@@ -191,3 +191,55 @@ def test_ellipsoidal_grains_one_upper_root_and_dilute_limit():
     np.testing.assert_allclose(bruggeman(ea, eb, f, shapes=[Shape.sphere(), None]), bruggeman(ea, eb, f), rtol=1e-9)
     with pytest.raises(InvalidInputError, match="random"):
         bruggeman(ea, eb, f, shapes=[Shape.spheroid(2.0, orientation="aligned"), None])
+
+
+def _general(ea, eb, p):
+    """The n-phase Aberth/Newton root finder, bypassing the two-sphere closed form."""
+    from nmmm.ema.bruggeman import _bruggeman_general, _groups, _phases
+
+    e, f = _phases([ea, eb], [p, 1 - np.asarray(p, float)])
+    return _bruggeman_general(e, f, *_groups(2, None))
+
+
+def test_two_sphere_fast_path_agrees_with_the_general_solver():
+    """Two different algorithms (closed-form quadratic vs. Aberth–Ehrlich + Newton on the
+    regularised polynomial) with the same limiting-absorption rule: random lossy phases,
+    metals (ε = −50 + 1i, −10 + 0.3i, lossless −5), lossless dielectrics, p over all of [0, 1]."""
+    from nmmm.ema.bruggeman import _bruggeman_two_spheres
+
+    rng = np.random.default_rng(16)
+    n = 4000
+    ea, eb = random_eps(rng, n), random_eps(rng, n)
+    metals = np.array([-50 + 1j, -10 + 0.3j, -5 + 0j, -2 + 0.01j, -120 + 8j])
+    dielectrics = np.array([1.0 + 0j, 2.25 + 0j, 12.0 + 0j, 2.0 + 0.5j])
+    ea[: n // 2] = rng.choice(metals, n // 2)
+    eb[: n // 4] = rng.choice(dielectrics, n // 4)
+    eb[n // 4 : n // 2] = rng.choice(np.r_[metals, dielectrics], n // 4)
+    ea[-200:] = rng.choice(dielectrics.real, 200) + 0j
+    eb[-200:] = rng.uniform(1, 20, 200) + 0j
+    p = rng.uniform(0, 1, n)
+    p[:: 10] = rng.choice([0.0, 1 / 3, 0.5, 2 / 3, 1.0], p[:: 10].size)
+    fast = _bruggeman_two_spheres(ea, eb, p)
+    slow = _general(ea, eb, p)
+    np.testing.assert_allclose(fast, slow, rtol=1e-10, atol=1e-12)
+    out = bruggeman(ea, eb, p)  # the public call takes the fast path
+    np.testing.assert_array_equal(out, np.where(fast.imag < 0, fast.real + 0j, fast))
+    assert np.all(out.imag >= 0)
+    assert np.max(np.abs(bruggeman_residual(out, [ea, eb], [p, 1 - p]))) < 1e-10
+
+
+def test_two_sphere_fast_path_where_the_principal_root_is_wrong():
+    """ε₁ = −50 + 1i in ε₂ = 2.25 at p = 0.2: the principal-sqrt formula
+    (b + sqrt(b² + 8ε₁ε₂))/4 gives a gain root (Im < 0); the fast path returns the other,
+    passive root, which is also the general solver's."""
+    from nmmm.ema.bruggeman import _bruggeman_two_spheres
+
+    e1, e2 = np.full(3, -50 + 1j), np.full(3, 2.25 + 0j)
+    p = np.array([0.1, 0.2, 0.5])
+    b = (3 * p - 1) * e1 + (2 - 3 * p) * e2
+    naive = (b + np.sqrt(b * b + 8 * e1 * e2)) / 4
+    other = -e1 * e2 / (2 * naive)  # product of the roots is −ε₁ε₂/2
+    assert np.all(naive.imag < 0) and np.all(other.imag > 0)
+    fast = _bruggeman_two_spheres(e1, e2, p)
+    np.testing.assert_allclose(fast, other, rtol=1e-12)
+    np.testing.assert_allclose(fast, _general(e1, e2, p), rtol=1e-10)

@@ -17,7 +17,10 @@ of the unperturbed polynomial nearest to it is returned. The result is continuou
 wavelength, has Im ε >= 0 and, for lossless dielectrics, is the real root between the phases'
 permittivities. The roots of the regularised polynomial come from the Aberth–Ehrlich iteration, the chosen
 one is polished by Newton's method on the unperturbed polynomial; a Numba kernel runs this
-over all wavelengths and fractions (no Python loop).
+over all wavelengths and fractions (no Python loop). Two spherical phases take a vectorised
+closed-form path instead: the quadratic ``2ε² − bε − ε₁ε₂ = 0``, ``b = (3p − 1)ε₁ + (2 − 3p)ε₂``,
+with the same limiting-absorption root choice (never the principal square root, which gives
+Im ε < 0 for metals); it agrees with the general solver to round-off (tested).
 
 Spherical grains by default (the percolation threshold of a conducting phase is then
 p = 1/3); randomly oriented ellipsoidal grains with ``shapes=`` (Polder & van Santen 1946),
@@ -217,6 +220,40 @@ def _bruggeman_kernel(e, f, g_phase, g_L, g_mult, delta, out):
         out[r] = x
 
 
+def _quadratic_roots(e1, e2, p):
+    """Both roots of 2ε² − bε − ε1ε2 = 0, b = (3p − 1)ε1 + (2 − 3p)ε2, without cancellation
+    (the larger-modulus root from ``−(a1 ± sqrt)/2`` with the sign that adds, the other from
+    the product of the roots)."""
+    a1 = -((3 * p - 1) * e1 + (2 - 3 * p) * e2)
+    a0 = -e1 * e2
+    sq = np.sqrt(a1 * a1 - 8 * a0)
+    same = (a1.real * sq.real + a1.imag * sq.imag) >= 0
+    qq = -0.5 * np.where(same, a1 + sq, a1 - sq)
+    zero = qq == 0
+    qs = np.where(zero, 1.0, qq)
+    return np.where(zero, 0j, qq / 2), np.where(zero, 0j, a0 / qs)
+
+
+def _bruggeman_two_spheres(e1, e2, p):
+    """Vectorised two-phase Bruggeman for spherical grains, the same physical-root rule as
+    :func:`_bruggeman_kernel` (limiting absorption: the phases get a loss ``i δ max|ε_i|``,
+    the perturbed quadratic's root with the larger Im ε guides the choice between the two
+    closed-form roots of the unperturbed quadratic; at a near-double root the guide is kept).
+    ``p`` is the fraction of phase 1. Choosing by the principal square root instead would put
+    metal–dielectric mixtures on the gain branch (Im ε < 0)."""
+    e1, e2, p = np.broadcast_arrays(np.asarray(e1, complex), np.asarray(e2, complex), np.asarray(p, float))
+    scale = np.maximum(np.abs(e1), np.abs(e2))
+    scale = np.where(scale == 0, 1.0, scale)
+    d = 1j * _DELTA * scale
+    g1, g2 = _quadratic_roots(e1 + d, e2 + d, p)
+    guide = np.where(g2.imag > g1.imag, g2, g1)
+    r1, r2 = _quadratic_roots(e1, e2, p)
+    x = np.where(np.abs(r2 - guide) < np.abs(r1 - guide), r2, r1)
+    x = np.where(np.abs(x - guide) > 1e-3 * scale, guide, x)
+    real = (e1.imag == 0) & (e2.imag == 0) & (np.abs(x.imag) <= 1e-12 * np.abs(x))
+    return np.where(real, x.real + 0j, x)
+
+
 def _groups(n, shapes):
     """(phase, L, multiplicity) of each distinct depolarization factor of each phase."""
     from nmmm.ema.shapes import Shape
@@ -289,13 +326,20 @@ def bruggeman(eps_phases, fractions, fraction=None, shapes=None) -> np.ndarray:
     g_phase, g_L, g_mult = _groups(e.shape[-1], shapes)
     if e.shape[-1] == 1:
         return e[..., 0].copy()
+    if e.shape[-1] == 2 and g_phase.size == 2 and np.all(np.abs(g_L - 1 / 3) < 1e-12):
+        # two spherical phases: the quadratic in closed form (same root rule, no kernel)
+        return passive(_bruggeman_two_spheres(e[..., 0], e[..., 1], f[..., 0]))
+    return passive(_bruggeman_general(e, f, g_phase, g_L, g_mult))
+
+
+def _bruggeman_general(e, f, g_phase, g_L, g_mult):
+    """The n-phase root finder (:func:`_bruggeman_kernel`) over the leading axes of e, f."""
     shape = e.shape[:-1]
     e2 = np.ascontiguousarray(e.reshape(-1, e.shape[-1]))
     f2 = np.ascontiguousarray(f.reshape(-1, f.shape[-1]).astype(float))
     out = np.empty(e2.shape[0], dtype=complex)
     _bruggeman_kernel(e2, f2, g_phase, g_L, g_mult, _DELTA, out)
-    out = out.reshape(shape)
-    return passive(out)
+    return out.reshape(shape)
 
 
 __all__ = ["bruggeman", "bruggeman_residual"]
