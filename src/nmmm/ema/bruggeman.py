@@ -220,6 +220,7 @@ def _bruggeman_kernel(e, f, g_phase, g_L, g_mult, delta, out):
         out[r] = x
 
 
+@numba.njit(cache=True)
 def _quadratic_roots(e1, e2, p):
     """Both roots of 2ε² − bε − ε1ε2 = 0, b = (3p − 1)ε1 + (2 − 3p)ε2, without cancellation
     (the larger-modulus root from ``−(a1 ± sqrt)/2`` with the sign that adds, the other from
@@ -227,31 +228,43 @@ def _quadratic_roots(e1, e2, p):
     a1 = -((3 * p - 1) * e1 + (2 - 3 * p) * e2)
     a0 = -e1 * e2
     sq = np.sqrt(a1 * a1 - 8 * a0)
-    same = (a1.real * sq.real + a1.imag * sq.imag) >= 0
-    qq = -0.5 * np.where(same, a1 + sq, a1 - sq)
-    zero = qq == 0
-    qs = np.where(zero, 1.0, qq)
-    return np.where(zero, 0j, qq / 2), np.where(zero, 0j, a0 / qs)
+    if a1.real * sq.real + a1.imag * sq.imag >= 0:
+        qq = -0.5 * (a1 + sq)
+    else:
+        qq = -0.5 * (a1 - sq)
+    if qq == 0:
+        return 0j, 0j
+    return qq / 2, a0 / qq
+
+
+@numba.vectorize(["complex128(complex128, complex128, float64, float64)"], cache=True)
+def _two_spheres_ufunc(e1, e2, p, delta):
+    scale = max(abs(e1), abs(e2))
+    if scale == 0:
+        scale = 1.0
+    d = 1j * delta * scale
+    g1, g2 = _quadratic_roots(e1 + d, e2 + d, p)
+    guide = g2 if g2.imag > g1.imag else g1
+    r1, r2 = _quadratic_roots(e1, e2, p)
+    x = r2 if abs(r2 - guide) < abs(r1 - guide) else r1
+    if abs(x - guide) > 1e-3 * scale:  # near-double root: keep the guide (as the kernel does)
+        x = guide
+    if e1.imag == 0 and e2.imag == 0 and abs(x.imag) <= 1e-12 * abs(x):
+        x = x.real + 0j  # a real root of a real polynomial: drop round-off
+    if x.imag < 0:  # round-off below zero on lossless input (see passive())
+        x = x.real + 0j
+    return x
 
 
 def _bruggeman_two_spheres(e1, e2, p):
-    """Vectorised two-phase Bruggeman for spherical grains, the same physical-root rule as
-    :func:`_bruggeman_kernel` (limiting absorption: the phases get a loss ``i δ max|ε_i|``,
+    """Two-phase Bruggeman for spherical grains in closed form, broadcast over e1, e2, p
+    (``p`` the fraction of phase 1), with the same physical-root rule as
+    :func:`_bruggeman_kernel` (limiting absorption): the phases get a loss ``i δ max|ε_i|``,
     the perturbed quadratic's root with the larger Im ε guides the choice between the two
-    closed-form roots of the unperturbed quadratic; at a near-double root the guide is kept).
-    ``p`` is the fraction of phase 1. Choosing by the principal square root instead would put
-    metal–dielectric mixtures on the gain branch (Im ε < 0)."""
-    e1, e2, p = np.broadcast_arrays(np.asarray(e1, complex), np.asarray(e2, complex), np.asarray(p, float))
-    scale = np.maximum(np.abs(e1), np.abs(e2))
-    scale = np.where(scale == 0, 1.0, scale)
-    d = 1j * _DELTA * scale
-    g1, g2 = _quadratic_roots(e1 + d, e2 + d, p)
-    guide = np.where(g2.imag > g1.imag, g2, g1)
-    r1, r2 = _quadratic_roots(e1, e2, p)
-    x = np.where(np.abs(r2 - guide) < np.abs(r1 - guide), r2, r1)
-    x = np.where(np.abs(x - guide) > 1e-3 * scale, guide, x)
-    real = (e1.imag == 0) & (e2.imag == 0) & (np.abs(x.imag) <= 1e-12 * np.abs(x))
-    return np.where(real, x.real + 0j, x)
+    closed-form roots of the unperturbed quadratic; at a near-double root the guide is kept.
+    Choosing by the principal square root instead would put metal–dielectric mixtures on the
+    gain branch (Im ε < 0). A Numba ufunc: one pass, no intermediate arrays."""
+    return _two_spheres_ufunc(np.asarray(e1, complex), np.asarray(e2, complex), np.asarray(p, float), _DELTA)
 
 
 def _groups(n, shapes):
@@ -321,14 +334,17 @@ def bruggeman(eps_phases, fractions, fraction=None, shapes=None) -> np.ndarray:
     2.171165
     """
     if fraction is not None:
-        eps_phases, fractions = [eps_phases, fractions], [fraction, 1 - as_fraction(fraction)]
+        fraction = as_fraction(fraction)
+        if shapes is None:  # two spherical phases: the quadratic in closed form (same root rule)
+            return _bruggeman_two_spheres(as_eps(eps_phases, "eps_inclusion"), as_eps(fractions, "eps_host"),
+                                          fraction)
+        eps_phases, fractions = [eps_phases, fractions], [fraction, 1 - fraction]
     e, f = _phases(eps_phases, fractions)
     g_phase, g_L, g_mult = _groups(e.shape[-1], shapes)
     if e.shape[-1] == 1:
         return e[..., 0].copy()
     if e.shape[-1] == 2 and g_phase.size == 2 and np.all(np.abs(g_L - 1 / 3) < 1e-12):
-        # two spherical phases: the quadratic in closed form (same root rule, no kernel)
-        return passive(_bruggeman_two_spheres(e[..., 0], e[..., 1], f[..., 0]))
+        return _bruggeman_two_spheres(e[..., 0], e[..., 1], f[..., 0])
     return passive(_bruggeman_general(e, f, g_phase, g_L, g_mult))
 
 
