@@ -1,10 +1,12 @@
 """Fitting: round trips model -> data -> fit, data made by pyElli, uncertainties, failures."""
 
+import warnings
+
 import numpy as np
 import pytest
 
 from nmmm.ellipsometry.data import EllipsometryData
-from nmmm.ellipsometry.fitting import Parameter, fit_psi_delta
+from nmmm.ellipsometry.fitting import FitAtBoundWarning, Parameter, fit_psi_delta
 from nmmm.ellipsometry.model import EllipsometryModel
 from nmmm.errors import ConvergenceError, InvalidInputError
 
@@ -47,7 +49,10 @@ def test_round_trip_with_noise_within_uncertainties():
                                   "epoxy.C": 0.0002})
     data = EllipsometryData.from_model(model.build(truth), np.linspace(400, 1000, 61), [60.0, 70.0],
                                        0.02, 0.08, noise_seed=11)
-    res = model.fit(data)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", FitAtBoundWarning)  # an interior optimum: no warning
+        res = model.fit(data)
+    assert res.at_bound == ()
     for name in res.names:
         assert abs(res[name] - truth[name]) < 4 * res.stderr[name], name
     assert 0.8 < res.mse < 1.2
@@ -136,3 +141,30 @@ def test_thickness_scan_finds_interference_order():
     assert grid.size == chi2.size and abs(scanned.values["epoxy.thickness_nm"] - 850.0) <= 2.0
     res = scanned.fit(data)
     assert abs(res["epoxy.thickness_nm"] - 850.0) < 4 * res.stderr["epoxy.thickness_nm"]
+
+
+def test_fit_ending_on_a_bound_warns():
+    """Data made with a 523 nm film, thickness bounded to [400, 500] nm: the fit ends on the
+    upper bound; it must warn (naming the parameter, value, bound), list it in ``at_bound`` and
+    flag it in the summary, while the interior parameters carry no flag."""
+    model = EllipsometryModel.from_dict({
+        "substrate": {"material": "main/Si/Green-2008"},
+        "layers": [{"name": "epoxy", "model": "cauchy",
+                    "thickness_nm": {"value": 480.0, "min": 400, "max": 500},
+                    "A": {"value": 1.55, "min": 1.2, "max": 2.0}, "B": {"value": 0.007, "min": -0.1, "max": 0.2},
+                    "C": {"value": 0.0, "fit": False}}]})
+    truth = dict(model.values, **{"epoxy.thickness_nm": 523.0, "epoxy.A": 1.552, "epoxy.B": 0.0071})
+    data = EllipsometryData.from_model(model.build(truth), np.linspace(400, 1000, 61), [60.0, 70.0],
+                                       0.02, 0.08, noise_seed=3)
+    with pytest.warns(FitAtBoundWarning) as record:
+        res = model.fit(data)
+    assert res.at_bound == ("epoxy.thickness_nm",)
+    assert res["epoxy.thickness_nm"] == pytest.approx(500.0, abs=1e-3)
+    msgs = [str(w.message) for w in record if issubclass(w.category, FitAtBoundWarning)]
+    assert len(msgs) == 1
+    assert "epoxy.thickness_nm" in msgs[0] and "upper bound" in msgs[0] and "500" in msgs[0]
+    assert "not meaningful" in msgs[0] and "widen" in msgs[0].lower() and "vary=False" in msgs[0]
+    assert issubclass(FitAtBoundWarning, UserWarning)
+    lines = {ln.split("=")[0].strip(): ln for ln in res.summary().splitlines() if "=" in ln and "epoxy." in ln}
+    assert "(at bound)" in lines["epoxy.thickness_nm"]
+    assert "(at bound)" not in lines["epoxy.A"]

@@ -3,6 +3,7 @@
 Public objects
 --------------
 - :class:`Parameter` — one fit parameter: value, bounds, whether it varies, unit.
+- :class:`FitAtBoundWarning` — issued when a fitted parameter ends on one of its bounds.
 - :class:`FitResult` — best values, standard uncertainties, covariance and correlation
   matrices, χ², Woollam's MSE, residuals, the cost history; ``summary()`` prints them.
 - :func:`fit_psi_delta` — fit any model ``build(values) -> Stack`` to an
@@ -28,7 +29,10 @@ MSE = √(χ²/(2N − M)) (Fujiwara 2007, ch. 5, with σ weights).
 A fit that did not converge (evaluation budget exhausted, non-finite model values) or whose
 parameters the data cannot determine (a singular Jacobian: a parameter without effect, or two
 parameters perfectly correlated) raises :class:`nmmm.ConvergenceError` carrying the cost
-history and a diagnosis; it never returns silently wrong parameters.
+history and a diagnosis; it never returns silently wrong parameters. A fit that ends with a
+parameter on one of its bounds is a constrained optimum, not a minimum of χ²: the covariance
+(a local quadratic approximation) does not describe it. It returns, lists those parameters in
+``FitResult.at_bound`` and issues a :class:`FitAtBoundWarning` per parameter.
 
 References
 ----------
@@ -40,6 +44,7 @@ References
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import Callable
 
@@ -49,7 +54,12 @@ from scipy.optimize import least_squares
 from nmmm.ellipsometry.forward import psi_delta, wrap_delta
 from nmmm.errors import ConvergenceError, InvalidInputError, NmmmError
 
-__all__ = ["Parameter", "FitResult", "fit_psi_delta", "psi_delta_residuals", "least_squares_fit"]
+__all__ = ["Parameter", "FitResult", "FitAtBoundWarning", "fit_psi_delta", "psi_delta_residuals", "least_squares_fit"]
+
+
+class FitAtBoundWarning(UserWarning):
+    """A fitted parameter ended on one of its bounds: its value is set by the bound, not by the
+    data, and its reported uncertainty is not meaningful."""
 
 
 @dataclass(frozen=True)
@@ -107,7 +117,8 @@ class FitResult:
     model : object
         What the model builder returned for the best values (e.g. the fitted Stack).
     at_bounds : tuple of str
-        Parameters that ended on a bound (their uncertainty is not meaningful).
+        Parameters that ended on a bound (their uncertainty is not meaningful); also
+        available as :attr:`at_bound`.
     """
 
     parameters: tuple
@@ -133,6 +144,12 @@ class FitResult:
         return {p.name: p.value for p in self.parameters}
 
     @property
+    def at_bound(self) -> tuple:
+        """Names of the varied parameters that ended on a bound (a :class:`FitAtBoundWarning`
+        was issued for each); empty for an unconstrained optimum."""
+        return self.at_bounds
+
+    @property
     def reduced_chi2(self) -> float:
         return self.mse**2
 
@@ -151,7 +168,7 @@ class FitResult:
         for p in self.parameters:
             unit = f" {p.unit}" if p.unit else ""
             if p.name in self.stderr:
-                flag = "  (at bound)" if p.name in self.at_bounds else ""
+                flag = "  (at bound: uncertainty not meaningful)" if p.name in self.at_bounds else ""
                 lines.append(f"  {p.name:<{width}} = {p.value:.6g} ± {self.stderr[p.name]:.2g}{unit}{flag}")
             else:
                 lines.append(f"  {p.name:<{width}} = {p.value:.6g}{unit}  (fixed)")
@@ -262,9 +279,20 @@ def least_squares_fit(residual_function: Callable, parameters, *,
     err = np.sqrt(np.diag(cov))
     new_params = tuple(replace(p, value=best[p.name]) for p in params)
     span = hi - lo
-    at_b = tuple(n for n, x, a, b, sp in zip(names, res.x, lo, hi, span)
-                 if (np.isfinite(a) and x - a <= 1e-6 * max(abs(a), sp if np.isfinite(sp) else 1, 1e-12))
-                 or (np.isfinite(b) and b - x <= 1e-6 * max(abs(b), sp if np.isfinite(sp) else 1, 1e-12)))
+    at_b = []
+    for n, x, a, b, sp, e in zip(names, res.x, lo, hi, span, err):
+        tol = 1e-6 * max(abs(a) if np.isfinite(a) else 0, abs(b) if np.isfinite(b) else 0,
+                         sp if np.isfinite(sp) else 1, 1e-12)
+        which = ("lower", a) if np.isfinite(a) and x - a <= tol else ("upper", b) if np.isfinite(b) and b - x <= tol else None
+        if which is None:
+            continue
+        at_b.append(n)
+        warnings.warn(FitAtBoundWarning(
+            f"parameter {n} ended on its {which[0]} bound ({x:.6g}, bound {which[1]:.6g}): the data "
+            f"pull it beyond the allowed range, so its value is set by the bound and its uncertainty "
+            f"(± {e:.2g}) is not meaningful. Widen the bound if the range allows it, or fix the "
+            "parameter (vary=False) at a value you trust"), stacklevel=2)
+    at_b = tuple(at_b)
     return FitResult(
         parameters=new_params, names=names, stderr=dict(zip(names, map(float, err))), covariance=cov,
         correlation=corr, chi2=chi2, dof=dof, mse=float(np.sqrt(chi2 / dof)), absolute_sigma=absolute_sigma,
