@@ -54,7 +54,7 @@ from nmmm.errors import InvalidInputError
 from nmmm.layers.fresnel import fresnel
 from nmmm.spectra import check_finite
 
-__all__ = ["ADResult", "adding_doubling", "gauss_quadrature", "radau_quadrature"]
+__all__ = ["ADResult", "adding_doubling", "gauss_quadrature", "hg_legendre_moments", "radau_quadrature"]
 
 
 # --------------------------------------------------------------------------------------
@@ -119,18 +119,30 @@ def _nodes(n_slab, n_ambient, N):
 # --------------------------------------------------------------------------------------
 # slab operators
 # --------------------------------------------------------------------------------------
-def _hg_redistribution(g, nu, N):
-    """δ-M truncated HG redistribution h(ν_i, ±ν_j), (B, N, N) each, and f = g^N."""
-    f = g**N
-    P = np.stack([npleg.legval(nu, np.eye(N)[k]) for k in range(N)], axis=0)  # (N_k, B, N)
-    hp = np.zeros(nu.shape + (N,))
-    hm = np.zeros_like(hp)
-    for k in range(N):
-        chi = (2 * k + 1) * (g**k - f) / (1 - f) if k > 0 else np.ones_like(g)
-        outer = P[k][:, :, None] * P[k][:, None, :]
-        hp += chi[:, None, None] * outer
-        hm += ((-1) ** k) * chi[:, None, None] * outer
+def _redistribution(chi, nu, N):
+    """δ-M truncated redistribution h(ν_i, ±ν_j), (B, N, N) each, and f.
+
+    ``chi`` (B, N + 1) holds the Legendre moments χ_0 = 1, χ_1 = g, …, χ_N of the phase
+    function p(cos θ) = Σ (2l+1) χ_l P_l(cos θ) (normalised to 1 over 4π / (4π)). δ-M
+    (Wiscombe 1977, eqs. 5–7): f = χ_N, χ*_l = (χ_l − f)/(1 − f) for l < N; the azimuthal
+    average is h(ν, ν') = Σ_{l<N} (2l+1) χ*_l P_l(ν) P_l(ν') (van de Hulst 1980, §3.4;
+    Prahl 1995, eq. 5.14). For HG, χ_l = g^l and f = g^N.
+    """
+    f = chi[:, N]
+    k = np.arange(N)
+    coef = (2 * k + 1) * (chi[:, :N] - f[:, None]) / (1 - f[:, None])  # (B, N)
+    coef[:, 0] = 1.0
+    P = npleg.legvander(nu, N - 1)  # (B, N_nodes, N_l)
+    sign = (-1.0) ** k
+    hp = np.einsum("bil,bl,bjl->bij", P, coef, P)
+    hm = np.einsum("bil,bl,bjl->bij", P, coef * sign, P)
     return hp, hm, f
+
+
+def hg_legendre_moments(g, n_moments):
+    """Legendre moments χ_l = g^l (l = 0 … n_moments − 1) of the Henyey–Greenstein phase function."""
+    g = np.asarray(g, dtype=float)
+    return g[..., None] ** np.arange(int(n_moments))
 
 
 def _diamond(a, dtau, nu, w, hp, hm):
@@ -147,9 +159,9 @@ def _diamond(a, dtau, nu, w, hp, hm):
     return 0.5 * (P - Q), 0.5 * (P + Q)
 
 
-def _slab(a, tau, g, nu, w, N):
+def _slab(a, tau, chi, nu, w, N):
     """Radiance operators (R, T) of homogeneous slabs by diamond start + doubling."""
-    hp, hm, f = _hg_redistribution(g, nu, N)
+    hp, hm, f = _redistribution(chi, nu, N)
     a_s = a * (1 - f) / (1 - a * f)
     tau_s = tau * (1 - a * f)
     inf = ~np.isfinite(tau_s)
@@ -222,6 +234,7 @@ def adding_doubling(
     substrate_reflectance=None,
     clear_coat_optical_thickness=0.0,
     quad_pts: int = 16,
+    phase_moments=None,
 ) -> ADResult:
     """Reflectance and transmittance of a scattering slab by adding–doubling.
 
@@ -231,8 +244,9 @@ def adding_doubling(
         Single-scattering albedo μ_s/(μ_a + μ_s), in [0, 1].
     optical_thickness : array_like
         (μ_a + μ_s)·thickness, ≥ 0; ``np.inf`` for an opaque (semi-infinite) slab.
-    g : array_like
-        Henyey–Greenstein asymmetry parameter in (−1, 1) (e.g. the Mie g).
+    g : array_like or None
+        Henyey–Greenstein asymmetry parameter in (−1, 1) (e.g. the Mie g). ``None`` when
+        ``phase_moments`` is given.
     n_slab : array_like
         Real index of the slab (the binder).
     n_ambient : float
@@ -247,6 +261,14 @@ def adding_doubling(
         same index between the ambient and the slab (clear coat in optical contact).
     quad_pts : int
         Quadrature points per hemisphere (even; 16 is accurate to ~1e-4 for g ≤ 0.9).
+    phase_moments : array_like, optional
+        A general phase function instead of HG: its Legendre moments χ_l, shape
+        ``(..., L)`` (leading axes broadcast with the other arguments), χ_0 = 1, χ_1 = g,
+        p(cos θ) = Σ (2l+1) χ_l P_l(cos θ). Moments l = 0 … quad_pts are used; χ_quad_pts is
+        the δ-M forward-peak fraction f (Wiscombe 1977); missing moments are taken as 0 (no
+        truncation). E.g. the Mie phase function from
+        :func:`nmmm.layers.paint.mie_phase_moments`; HG is
+        :func:`hg_legendre_moments` (χ_l = g^l).
 
     Returns
     -------
@@ -266,9 +288,26 @@ def adding_doubling(
     tau = np.asarray(optical_thickness, dtype=float)
     if np.any(np.isnan(tau)) or np.any(tau < 0):
         raise InvalidInputError("optical_thickness must be >= 0 (np.inf for an opaque slab)")
-    gg = check_finite(g, "g").astype(float)
-    if np.any((gg <= -1) | (gg >= 1)):
-        raise InvalidInputError("g must lie in (-1, 1)")
+    if phase_moments is None:
+        if g is None:
+            raise InvalidInputError("give g (Henyey–Greenstein) or phase_moments (a general phase function)")
+        gg = check_finite(g, "g").astype(float)
+        if np.any((gg <= -1) | (gg >= 1)):
+            raise InvalidInputError("g must lie in (-1, 1)")
+        chi = None
+    else:
+        if g is not None:
+            raise InvalidInputError("give either g (Henyey–Greenstein) or phase_moments, not both")
+        chi = np.atleast_1d(check_finite(phase_moments, "phase_moments")).astype(float)
+        if np.any(np.abs(chi[..., 0] - 1) > 1e-6):
+            raise InvalidInputError("phase_moments[..., 0] must be 1 (a normalised phase function)")
+        if np.any(np.abs(chi) > 1 + 1e-9):
+            raise InvalidInputError("phase_moments must lie in [-1, 1] (|χ_l| <= 1 for a phase function)")
+        L = chi.shape[-1]
+        chi = chi[..., : N + 1] if L >= N + 1 else np.concatenate([chi, np.zeros(chi.shape[:-1] + (N + 1 - L,))], axis=-1)
+        if np.any(chi[..., N] >= 1 - 1e-12):
+            raise InvalidInputError("the phase function is a pure forward spike (χ_N = 1); it cannot be truncated")
+        gg = chi[..., 1]
     ns = _real_index(n_slab, "n_slab")
     n0 = float(_real_index(n_ambient, "n_ambient"))
     if np.any(ns < n0):
@@ -285,13 +324,17 @@ def adding_doubling(
     shape = np.broadcast_shapes(a.shape, tau.shape, gg.shape, ns.shape, nb.shape, tcc.shape, rho.shape)
     a, tau, gg, ns, nb, tcc, rho = (np.broadcast_to(v, shape).ravel() for v in (a, tau, gg, ns, nb, tcc, rho))
     Bn = a.size
+    if chi is None:
+        chi = hg_legendre_moments(gg, N + 1)
+    else:
+        chi = np.broadcast_to(chi, shape + (N + 1,)).reshape(Bn, N + 1)
 
     nu, w = _nodes(ns, n0, N)
     c = 2 * nu * w  # flux weights
     ang = np.degrees(np.arccos(np.clip(nu, 0, 1)))
     I = np.eye(N)[None]
 
-    Rs, Ts = _slab(a, tau, gg, nu, w, N)
+    Rs, Ts = _slab(a, tau, chi, nu, w, N)
 
     # bottom boundary: Lambertian substrate (R_ij = rho c_j) or Fresnel interface
     if use_sub:

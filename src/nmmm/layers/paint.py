@@ -7,6 +7,9 @@ Public functions and classes
 - :func:`film_coefficients` — μ_a, μ_s (nm⁻¹), g of the film over wavelength.
 - :func:`paint_reflectance` — reflectance spectrum, ``solver="km"`` or ``"ad"``
   (registry :data:`PAINT_SOLVERS`). Returns :class:`PaintReflectance`.
+- :func:`mie_phase_moments` — Legendre moments χ_l of the film's Mie phase function
+  (size-distribution average weighted by the scattering cross sections), for the AD path
+  with ``phase_function="mie"``.
 - :func:`compare_km_ad` — both solvers on the same film, with the largest reflectance
   difference and the CIEDE2000 colour difference under D65: where KM is good enough.
 
@@ -36,7 +39,17 @@ coat (collimated in: e^{−α d}; diffuse out: 2E₃(α d)) and Saunderson's cor
     R = k1 + (1 − k1)(1 − k2) t_c t_d R_b / (1 − k2 t_d² R_b)
 
 AD path: :func:`nmmm.layers.adding_doubling.adding_doubling` with albedo μ_s/(μ_a + μ_s),
-optical thickness (μ_a + μ_s) X, HG phase function of the Mie g.
+optical thickness (μ_a + μ_s) X, and either (``phase_function="hg"``, default) the
+Henyey–Greenstein phase function of the Mie g or (``"mie"``) the actual Mie phase function:
+its Legendre moments
+
+    χ_l = ∫ p(μ) P_l(μ) dμ / ∫ p(μ) dμ ,   p(μ) = Σ_D N(D) [|S1|² + |S2|²](μ; D) S(q)
+
+by Gauss–Legendre quadrature in μ = cos θ (exact for the polynomial |S|² once the node
+count exceeds n_max + l/2), the size average weighting each size's phase function by its
+scattering cross section (the unnormalised |S|² sum does that), S(q) the Percus–Yevick
+structure factor when dependent scattering is on. The slab solver truncates the series
+with δ-M (Wiscombe 1977) at the quadrature order.
 
 References
 ----------
@@ -47,6 +60,9 @@ References
 - J. L. Saunderson, J. Opt. Soc. Am. 32, 727 (1942); P. Kubelka, J. Opt. Soc. Am. 38, 448
   (1948); L. F. Gate, Appl. Opt. 13, 236 (1974).
 - S. A. Prahl, "The adding-doubling method" (1995), in Welch & van Gemert (eds.).
+- W. J. Wiscombe, "The delta-M method: rapid yet accurate radiative flux calculations for
+  strongly asymmetric phase functions", J. Atmos. Sci. 34, 1408 (1977).
+- H. C. van de Hulst, *Multiple Light Scattering*, Academic Press (1980), vol. 1, ch. 3.
 """
 
 from __future__ import annotations
@@ -58,7 +74,7 @@ from scipy.special import expn
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.adding_doubling import adding_doubling
-from nmmm.layers.distributions import SizeDistribution, pigment_optics
+from nmmm.layers.distributions import SizeDistribution, percus_yevick_structure_factor, pigment_optics
 from nmmm.layers.kubelka_munk import km_coefficients, km_reflectance, saunderson, saunderson_k1, saunderson_k2
 from nmmm.layers.fresnel import medium_nk
 from nmmm.spectra import as_wavelength_nm, check_finite, check_fraction
@@ -69,6 +85,7 @@ __all__ = [
     "PaintReflectance",
     "PAINT_SOLVERS",
     "film_coefficients",
+    "mie_phase_moments",
     "paint_reflectance",
     "compare_km_ad",
 ]
@@ -171,7 +188,47 @@ def film_coefficients(film: PaintFilm, wavelength_nm) -> FilmCoefficients:
     return FilmCoefficients(w, mu_a, mu_s, opt.g, n_host, alpha_b)
 
 
-def _km(film, co, specular, quad_pts=None, km_method="gate"):
+def mie_phase_moments(film: PaintFilm, wavelength_nm, n_moments: int = 17, n_angles: int | None = None) -> np.ndarray:
+    """Legendre moments χ_l (l = 0 … n_moments − 1) of the film's Mie phase function.
+
+    The size distribution is averaged with each size's phase function weighted by its
+    scattering cross section (number weight × C_sca): p(μ) ∝ Σ_D N(D)(|S1|² + |S2|²)
+    (Bohren & Huffman 1983, eq. 4.74 normalisation), times the Percus–Yevick S(q) when
+    ``film.dependent_scattering``. χ_l = ∫ p P_l dμ / ∫ p dμ on ``n_angles`` Gauss–Legendre
+    nodes in μ = cos θ (default: enough for the largest size parameter to be exact).
+
+    Returns
+    -------
+    ndarray, shape (W, n_moments); χ_0 = 1 and χ_1 = the C_sca-weighted g.
+    """
+    from nmmm.layers.mie import mie
+
+    w = as_wavelength_nm(np.atleast_1d(wavelength_nm))
+    L = int(n_moments)
+    if L < 1:
+        raise InvalidInputError("n_moments must be >= 1")
+    n_host = _nk(film.binder, w, "binder").real
+    nk = _nk(film.pigment, w, "pigment")
+    d = film.distribution.diameter_nm
+    wn = film.distribution.number_weights
+    if n_angles is None:
+        x = float(np.max(np.pi * d.max() * n_host / w))
+        n_angles = max(48, int(x + 4.05 * x ** (1 / 3) + 2 + L / 2) + 8)
+    mu, wq = np.polynomial.legendre.leggauss(int(n_angles))
+    r = mie(nk[:, None], n_host[:, None], d[None, :], w[:, None], angles_deg=np.degrees(np.arccos(mu)))
+    s2 = np.abs(r.s1) ** 2 + np.abs(r.s2) ** 2  # (W, D, A), ∝ k² dC_sca/dΩ
+    p = np.einsum("d,wda->wa", wn, s2)
+    if film.dependent_scattering:
+        k = 2 * np.pi * n_host / w
+        q = 2 * k[:, None] * np.sqrt((1 - mu[None, :]) / 2)
+        d_hs = film.distribution.moment(3) ** (1 / 3)
+        p = p * percus_yevick_structure_factor(q * d_hs, float(film.volume_fraction))
+    P = np.polynomial.legendre.legvander(mu, L - 1)  # (A, L)
+    chi = (p * wq) @ P
+    return chi / chi[:, :1]
+
+
+def _km(film, co, specular, quad_pts=None, km_method="gate", phase_function=None):
     K, S = km_coefficients(co.mu_a_per_nm, co.mu_s_per_nm, co.g, method=km_method)
     rho = np.broadcast_to(np.asarray(film.substrate_reflectance, dtype=float), co.wavelength_nm.shape)
     Rb = km_reflectance(K, S, film.thickness_nm if np.isfinite(film.thickness_nm) else 1e15, rho)
@@ -186,19 +243,24 @@ def _km(film, co, specular, quad_pts=None, km_method="gate"):
     return body
 
 
-def _ad(film, co, specular, quad_pts=16, km_method=None):
+def _ad(film, co, specular, quad_pts=16, km_method=None, phase_function="hg"):
     mu_t = co.mu_a_per_nm + co.mu_s_per_nm
     with np.errstate(invalid="ignore", divide="ignore"):
         albedo = np.where(mu_t > 0, co.mu_s_per_nm / mu_t, 0.0)
     tau = mu_t * film.thickness_nm if np.isfinite(film.thickness_nm) else np.full_like(mu_t, np.inf)
+    if phase_function == "mie":
+        g, chi = None, mie_phase_moments(film, co.wavelength_nm, n_moments=quad_pts + 1)
+    else:
+        g, chi = np.clip(co.g, -0.999, 0.999), None
     r = adding_doubling(
         albedo,
         tau,
-        np.clip(co.g, -0.999, 0.999),
+        g,
         n_slab=co.n_binder,
         substrate_reflectance=np.broadcast_to(np.asarray(film.substrate_reflectance, dtype=float), mu_t.shape),
         clear_coat_optical_thickness=co.binder_absorption_per_nm * film.clear_coat_thickness_nm,
         quad_pts=quad_pts,
+        phase_moments=chi,
     )
     return r.reflectance if specular == "included" else r.body_reflectance
 
@@ -214,6 +276,7 @@ def paint_reflectance(
     specular: str = "included",
     quad_pts: int = 16,
     km_method: str = "gate",
+    phase_function: str = "hg",
 ) -> PaintReflectance:
     """Reflectance spectrum of a paint film (0°/d, collimated normal illumination).
 
@@ -229,13 +292,18 @@ def paint_reflectance(
         Adding–doubling quadrature points per hemisphere.
     km_method : str
         K, S mapping (:data:`nmmm.layers.kubelka_munk.KM_COEFFICIENT_METHODS`).
+    phase_function : {"hg", "mie"}
+        Adding–doubling only: Henyey–Greenstein with the Mie g (default, faster) or the
+        full Mie phase function (:func:`mie_phase_moments`, δ-M truncated).
     """
     if solver not in PAINT_SOLVERS:
         raise InvalidInputError(f"unknown solver {solver!r}; choose from {sorted(PAINT_SOLVERS)}")
     if specular not in ("included", "excluded"):
         raise InvalidInputError("specular must be 'included' or 'excluded'")
+    if phase_function not in ("hg", "mie"):
+        raise InvalidInputError(f"phase_function must be 'hg' or 'mie', got {phase_function!r}")
     co = film_coefficients(film, wavelength_nm)
-    R = PAINT_SOLVERS[solver](film, co, specular, quad_pts=quad_pts, km_method=km_method)
+    R = PAINT_SOLVERS[solver](film, co, specular, quad_pts=quad_pts, km_method=km_method, phase_function=phase_function)
     return PaintReflectance(co.wavelength_nm, np.asarray(R, dtype=float), solver, specular, co)
 
 
