@@ -12,6 +12,7 @@ measured once on 8 other seeds of the same set-up (seeds 0–7, not those used h
   4.3 %; thickness is biased by the blurred edges (+0.45 z-px, 5 %): tolerance 1 z-pixel.
 """
 
+import json
 import math
 
 import numpy as np
@@ -140,3 +141,25 @@ def test_estimators_reject_empty_images():
         estimate_flakes(np.zeros((64, 64), bool), 1.0)
     with pytest.raises(InvalidInputError, match="chord"):
         disc_diameters_from_chords([1.0, -2.0, 3.0])
+
+
+def test_analyze_cli_with_model_option(tmp_path):
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from nmmm.microstructure.cli import micro
+
+    # a flake cross-section saved with the substrate horizontal (rows = height)
+    dep = M.flake_deposit((2e5, 2e5, 10_000.0), 8_000.0, 500.0, fraction=0.03, tilt_std_deg=3.0,
+                          exclusion_nm=300.0, seed=3)
+    sec = dep.window((0.0, 1e5), (2e5, 100.0)).rasterize(voxel_nm=(100.0, 100.0, 100.0)).labels[:, 0, :] > 0
+    png = tmp_path / "flakes.png"
+    Image.fromarray((sec.T[::-1] * 255).astype(np.uint8)).save(png)
+    r = CliRunner().invoke(micro, ["analyze", str(png), "--pixel-nm", "100", "--model", "flakes", "--json"])
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.output[: r.output.rindex("}") + 1])
+    # 5-pixel-thick flakes, vertical pixel 100 nm: thickness to a pixel
+    assert out["flake_deposit.thickness_nm"] == pytest.approx(500.0, abs=100.0)
+    assert out["flake_deposit.n_sections"] > 5
+    r = CliRunner().invoke(micro, ["analyze", str(png), "--model", "spheres"])
+    assert r.exit_code != 0

@@ -17,7 +17,8 @@ Image analysis: :func:`read_image`, :func:`binarize`, :func:`area_fraction`,
 :func:`covariance`, :func:`covariance_profile`, :func:`integral_range`,
 :func:`granulometry`, :func:`particle_statistics`, :func:`nearest_neighbour_distances`,
 :func:`exclusion_radius`, :func:`estimate_boolean`, :func:`estimate_hardcore`,
-:func:`analyze_image`.
+:func:`estimate_aggregates` (cluster model from particle centres' g(r)),
+:func:`estimate_flakes` (flake model from cross-sections), :func:`analyze_image`.
 
 RVE (Kanit et al. 2003): :func:`fit_rve`, :class:`RVEFit`, :func:`rve_study`.
 
@@ -54,6 +55,15 @@ from nmmm.microstructure.boolean import (
     boolean_particles,
     boolean_spheres,
     covariogram_ratio,
+)
+from nmmm.microstructure.estimation import (
+    cluster_pair_correlation,
+    disc_diameters_from_chords,
+    estimate_aggregates,
+    estimate_flakes,
+    flake_sections,
+    pair_correlation,
+    particle_centres,
 )
 from nmmm.microstructure.flakes import SEED_METALLIC_CELL_NM, FlakeDeposit, flake_deposit
 from nmmm.microstructure.hardcore import (
@@ -95,7 +105,14 @@ __all__ = [
     "covariance",
     "covariance_profile",
     "covariogram_ratio",
+    "cluster_pair_correlation",
+    "disc_diameters_from_chords",
+    "estimate_aggregates",
     "estimate_boolean",
+    "estimate_flakes",
+    "flake_sections",
+    "pair_correlation",
+    "particle_centres",
     "estimate_hardcore",
     "exclusion_radius",
     "fit_rve",

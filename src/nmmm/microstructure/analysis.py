@@ -562,6 +562,7 @@ class ImageAnalysis:
     hardcore: dict | None = field(repr=False)
     integral_range_nm2: float
     granulometry: dict = field(repr=False)
+    model_estimate: dict | None = field(default=None, repr=False)
 
     def summary(self) -> dict:
         d = self.particles.equivalent_diameters_nm[~self.particles.on_border]
@@ -581,6 +582,11 @@ class ImageAnalysis:
         }
         if self.hardcore is not None:
             out["hardcore_radius_nm"] = self.hardcore["radius_nm"]
+        if self.model_estimate is not None:
+            name = self.model_estimate["model"]
+            for k, val in self.model_estimate.items():
+                if isinstance(val, (int, float, np.floating, np.integer)) and not isinstance(val, bool):
+                    out[f"{name}.{k}"] = float(val) if isinstance(val, (float, np.floating)) else int(val)
         return out
 
     def plot(self, path=None, title: str | None = None):
@@ -639,12 +645,18 @@ class ImageAnalysis:
 
 
 def analyze_image(image, pixel_nm=1.0, threshold="otsu", invert: bool = False, smooth_px: float = 1.0,
-                  min_size_px: int = 4, periodic: bool = False, granulometry_radii_nm=None) -> ImageAnalysis:
+                  min_size_px: int = 4, periodic: bool = False, granulometry_radii_nm=None,
+                  model: str | None = None) -> ImageAnalysis:
     """Analyse an SEM-like image: binarise, measure, estimate the models' parameters.
 
     ``image`` is a grey-level array, a binary array, a :class:`Microstructure` (2-D) or a
-    path to an image file.
+    path to an image file. ``model`` adds a model fit (``.model_estimate``, prefixed keys
+    in ``summary()``): ``"aggregates"`` (:func:`~nmmm.microstructure.estimation.estimate_aggregates`)
+    or ``"flakes"`` (:func:`~nmmm.microstructure.estimation.estimate_flakes`, for a
+    cross-section with the substrate horizontal, i.e. along the image rows).
     """
+    if model not in (None, "aggregates", "flakes"):
+        raise InvalidInputError(f"model must be None, 'aggregates' or 'flakes', got {model!r}")
     if isinstance(image, (str, Path)):
         image = read_image(image)
     if isinstance(image, Microstructure):
@@ -676,4 +688,12 @@ def analyze_image(image, pixel_nm=1.0, threshold="otsu", invert: bool = False, s
     if granulometry_radii_nm is None:
         granulometry_radii_nm = np.linspace(0, 3 * boo["radius_nm"], 13)
     gr = granulometry(b, granulometry_radii_nm, v, periodic)
-    return ImageAnalysis(img, b, v, thr, float(b.mean()), st, nn, rex, boo, hc, A, gr)
+    est = None
+    if model is not None:
+        from nmmm.microstructure import estimation  # imports this module: import here
+
+        if model == "aggregates":
+            est = estimation.estimate_aggregates(b, v, periodic)
+        else:  # the substrate along the rows: estimate_flakes wants it along axis 0
+            est = estimation.estimate_flakes(b.T, (v[1], v[0]), periodic, min_size_px)
+    return ImageAnalysis(img, b, v, thr, float(b.mean()), st, nn, rex, boo, hc, A, gr, est)

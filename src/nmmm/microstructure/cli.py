@@ -14,7 +14,9 @@
   For ``flake_deposit`` give ``box_nm`` and ``voxel_nm`` (anisotropic allowed) instead of
   ``shape``.
 - ``nmmm micro analyze image.png --pixel-nm 10`` — prints the estimated parameters and
-  writes a figure with the detected particles and their exclusion zones.
+  writes a figure with the detected particles and their exclusion zones;
+  ``--model aggregates`` adds the cluster-model fit, ``--model flakes`` the flake model
+  from a cross-section (substrate horizontal).
 - ``nmmm micro info cell.tif`` — shape, voxel size, fractions and parameters of a file.
 """
 
@@ -104,8 +106,11 @@ def generate(config, output):
 @click.option("--invert", is_flag=True, help="Particles are darker than the matrix.")
 @click.option("--smooth-px", default=1.0, show_default=True, type=float, help="Gaussian smoothing before thresholding.")
 @click.option("--figure", default=None, help="Figure path (default: <image>_analysis.png).")
+@click.option("--model", type=click.Choice(["aggregates", "flakes"]), default=None,
+              help="Also fit the aggregate (cluster) model, or the flake model to a cross-section "
+                   "with the substrate horizontal.")
 @click.option("--json", "as_json", is_flag=True, help="Print the estimates as JSON.")
-def analyze(image, pixel_nm, threshold, invert, smooth_px, figure, as_json):
+def analyze(image, pixel_nm, threshold, invert, smooth_px, figure, model, as_json):
     """Estimate fraction, sizes, exclusion zones and model parameters from an SEM-like image."""
     from nmmm.microstructure.analysis import analyze_image, read_image
 
@@ -116,7 +121,7 @@ def analyze(image, pixel_nm, threshold, invert, smooth_px, figure, as_json):
             thr = float(threshold)
         except ValueError:
             raise InvalidInputError(f"--threshold must be 'otsu' or a number, got {threshold!r}") from None
-    res = analyze_image(img, pixel_nm, thr, invert, smooth_px)
+    res = analyze_image(img, pixel_nm, thr, invert, smooth_px, model=model)
     s = res.summary()
     fig = figure or str(Path(image).with_name(Path(image).stem + "_analysis.png"))
     res.plot(fig, title=f"{Path(image).name}: area fraction {res.fraction:.3f}")
