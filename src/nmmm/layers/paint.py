@@ -246,7 +246,8 @@ def _km(film, co, specular, quad_pts=None, km_method="gate", phase_function=None
 def _ad(film, co, specular, quad_pts=16, km_method=None, phase_function="hg"):
     mu_t = co.mu_a_per_nm + co.mu_s_per_nm
     with np.errstate(invalid="ignore", divide="ignore"):
-        albedo = np.where(mu_t > 0, co.mu_s_per_nm / mu_t, 0.0)
+        # clipped: a lossless pigment's q_abs = q_ext − q_sca can round to −1e-17
+        albedo = np.clip(np.where(mu_t > 0, co.mu_s_per_nm / mu_t, 0.0), 0.0, 1.0)
     tau = mu_t * film.thickness_nm if np.isfinite(film.thickness_nm) else np.full_like(mu_t, np.inf)
     if phase_function == "mie":
         g, chi = None, mie_phase_moments(film, co.wavelength_nm, n_moments=quad_pts + 1)
