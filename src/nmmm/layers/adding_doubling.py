@@ -8,6 +8,9 @@ Public functions
   medium (an interface) or a Lambertian substrate in optical contact, optionally under a
   non-scattering absorbing clear coat of the same index. Vectorised: every argument
   broadcasts; all slabs of a batch are solved together with batched linear algebra.
+  A general phase function (e.g. Mie) is given instead of g by its Legendre moments
+  (``phase_moments``).
+- :func:`hg_legendre_moments` — χ_l = g^l, the Henyey–Greenstein phase function as a series.
 - :func:`radau_quadrature`, :func:`gauss_quadrature` — nodes and weights on [a, b].
 - :class:`ADResult` — the result.
 
@@ -16,8 +19,11 @@ Method (Prahl 1995; van de Hulst 1980)
 The azimuth-averaged radiance is discretised at N cosines ν_j in each hemisphere: Gauss
 points on (0, ν_c) and Radau points on (ν_c, 1] (ν = 1, normal incidence, is a node),
 ν_c = cosine of the critical angle in the slab; Radau points on (0, 1] when the slab
-index equals the ambient one. The Henyey–Greenstein phase function is expanded in Legendre
-polynomials and truncated with Wiscombe's (1977) δ-M method (f = g^N). A thin layer is
+index equals the ambient one. The phase function p(cos θ) = Σ (2l+1) χ_l P_l(cos θ) —
+Henyey–Greenstein (χ_l = g^l) by default, or any given moments such as Mie's — is truncated
+with Wiscombe's (1977) δ-M method (f = χ_N; χ*_l = (χ_l − f)/(1 − f); albedo and optical
+thickness scaled by 1 − a f) and azimuthally averaged into the redistribution function
+h(ν, ν') = Σ_{l<N} (2l+1) χ*_l P_l(ν) P_l(ν') (van de Hulst 1980, §3.4; Prahl 1995, §5.3). A thin layer is
 started with Wiscombe's (1976) diamond initialization and doubled to the full thickness;
 layers are combined by the adding equations. Reflection and transmission are kept as
 *radiance operators* (radiance out = operator · radiance in, the quadrature weights 2ν_j w_j

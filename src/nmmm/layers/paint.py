@@ -308,16 +308,17 @@ def paint_reflectance(
     return PaintReflectance(co.wavelength_nm, np.asarray(R, dtype=float), solver, specular, co)
 
 
-def compare_km_ad(film: PaintFilm, wavelength_nm, specular: str = "included", quad_pts: int = 16) -> dict:
+def compare_km_ad(film: PaintFilm, wavelength_nm, specular: str = "included", quad_pts: int = 16, phase_function: str = "hg") -> dict:
     """Kubelka–Munk against adding–doubling on one film.
 
     Returns a dict with both spectra, ``max_abs_difference`` (and the wavelength where it
     occurs), and ``delta_e2000`` between the two colours under D65 (CIE 1931 2°).
+    ``phase_function`` ("hg" or "mie") selects the adding–doubling phase function.
     """
     from nmmm.appearance.colorimetry import delta_e2000, spectra_to_lab
 
     km = paint_reflectance(film, wavelength_nm, "km", specular)
-    ad = paint_reflectance(film, wavelength_nm, "ad", specular, quad_pts=quad_pts)
+    ad = paint_reflectance(film, wavelength_nm, "ad", specular, quad_pts=quad_pts, phase_function=phase_function)
     d = km.reflectance - ad.reflectance
     i = int(np.argmax(np.abs(d)))
     lab_km = spectra_to_lab(km.wavelength_nm, km.reflectance)
