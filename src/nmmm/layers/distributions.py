@@ -6,7 +6,7 @@ Public functions and classes
 - :class:`SizeDistribution` — number-weighted diameter nodes (nm) of a polydisperse pigment.
 - :func:`monodisperse`, :func:`lognormal`, :func:`histogram` — build one.
 - :func:`equivalent_sphere_diameter` — the sphere standing for a cube (pseudo-cube), a rod
-  (cylinder) or a spheroid; ``method`` = ``"volume"`` (equal volume, the default),
+  (cylinder), a spheroid or a rhombohedron; ``method`` = ``"volume"`` (equal volume, the default),
   ``"surface"`` (equal area) or ``"volume_to_surface"`` (equal V/S, Grenfell & Warren 1999).
   Registry: :data:`EQUIVALENT_SPHERE_METHODS`.
 - :func:`percus_yevick_structure_factor` — hard-sphere S(q) in the Percus–Yevick
@@ -33,6 +33,14 @@ pigment volume, that number adjustment is automatic. A pseudo-cube of "large dia
 δ (the body diagonal, as for the hematite pseudo-cubes of Manickavasagam et al. 2004) has
 edge a = δ/√3.
 
+Rhombohedra. A rhombohedron of edge a whose three edges at a vertex make the angle α with
+each other (six congruent rhombic faces) has V = a³ √(1 − 3cos²α + 2cos³α) (the volume of
+the parallelepiped spanned by three unit-angle vectors, |det| of their Gram matrix to the
+½) and S = 6a² sin α; α = 90° is the cube, 0 < α < 120° (at 120° it flattens).
+Hematite's "pseudo-cubes" are rhombohedra bounded by {01-12} faces; with the hexagonal
+cell a = 5.0356 Å, c = 13.7489 Å (Blake et al. 1966) the edges of the {01-12} rhombohedron
+meet at α = 85.71° (interfacial angle 86.0°) — :data:`HEMATITE_RHOMBOHEDRON_ANGLE_DEG`.
+
 References
 ----------
 - M. I. Mishchenko, L. D. Travis, A. A. Lacis, *Scattering, Absorption, and Emission of
@@ -51,6 +59,8 @@ References
   formalism", J. Appl. Phys. 51, 3465 (1980). doi:10.1063/1.328200
 - S. Manickavasagam, M. P. Mengüç, M. Saltiel, J. Colloid Interface Sci. 280, 417 (2004)
   (hematite particle shape).
+- R. L. Blake, R. E. Hessevick, T. Zoltai, L. W. Finger, "Refinement of the hematite
+  structure", Am. Mineral. 51, 123 (1966) (cell a = 5.0356 Å, c = 13.7489 Å).
 """
 
 from __future__ import annotations
@@ -70,6 +80,8 @@ __all__ = [
     "lognormal",
     "histogram",
     "EQUIVALENT_SPHERE_METHODS",
+    "HEMATITE_RHOMBOHEDRON_ANGLE_DEG",
+    "rhombohedron_volume_surface",
     "equivalent_sphere_diameter",
     "percus_yevick_structure_factor",
     "PigmentOptics",
@@ -165,6 +177,25 @@ def histogram(bin_edges_nm, counts, nodes_per_bin: int = 4) -> SizeDistribution:
 # --------------------------------------------------------------------------------------
 # equivalent spheres
 # --------------------------------------------------------------------------------------
+#: Angle (deg) between the edges of hematite's {01-12} ("pseudo-cube") rhombohedron, from
+#: the hexagonal cell a = 5.0356 Å, c = 13.7489 Å of Blake et al. (1966).
+HEMATITE_RHOMBOHEDRON_ANGLE_DEG = 85.7
+
+
+def rhombohedron_volume_surface(edge_nm, angle_deg) -> tuple[float, float]:
+    """Volume (nm³) and surface area (nm²) of a rhombohedron.
+
+    V = a³ √(1 − 3cos²α + 2cos³α), S = 6a² sin α for edge a and rhombohedral angle α
+    (the angle between any two edges at a vertex), 0 < α < 120°; α = 90° is the cube.
+    """
+    a = float(check_positive(edge_nm, "edge_nm"))
+    alpha = float(check_finite(angle_deg, "angle_deg"))
+    if not 0.0 < alpha < 120.0:
+        raise InvalidInputError(f"angle_deg of a rhombohedron must be in (0, 120) degrees (90 = cube), got {alpha:g}")
+    c = np.cos(np.radians(alpha))
+    return a**3 * np.sqrt(1 - 3 * c * c + 2 * c**3), 6 * a * a * np.sin(np.radians(alpha))
+
+
 def _shape_volume_surface(shape: str, dims: dict) -> tuple[float, float]:
     shape = shape.lower()
     if shape in ("cube", "pseudo-cube", "pseudocube"):
@@ -200,10 +231,16 @@ def _shape_volume_surface(shape: str, dims: dict) -> tuple[float, float]:
             e = np.sqrt(1 - a * a / (c * c))
             S = 2 * np.pi * a * a * (1 + c / (a * e) * np.arcsin(e))
         return V, S
+    if shape == "rhombohedron":
+        missing = [k for k in ("edge_nm", "angle_deg") if k not in dims]
+        if missing:
+            raise InvalidInputError(f"a rhombohedron needs edge_nm and angle_deg (hematite: "
+                                    f"{HEMATITE_RHOMBOHEDRON_ANGLE_DEG}); missing {missing}")
+        return rhombohedron_volume_surface(dims["edge_nm"], dims["angle_deg"])
     if shape == "sphere":
         D = float(check_positive(dims.get("diameter_nm", np.nan), "diameter_nm"))
         return np.pi * D**3 / 6, np.pi * D**2
-    raise InvalidInputError(f"unknown shape {shape!r}; use 'cube', 'rod', 'spheroid' or 'sphere'")
+    raise InvalidInputError(f"unknown shape {shape!r}; use 'cube', 'rod', 'spheroid', 'rhombohedron' or 'sphere'")
 
 
 def _eq_volume(V, S):
@@ -231,10 +268,12 @@ def equivalent_sphere_diameter(shape: str, method: str = "volume", **dims) -> fl
 
     Parameters
     ----------
-    shape : {"cube", "rod", "spheroid", "sphere"}
+    shape : {"cube", "rod", "spheroid", "rhombohedron", "sphere"}
         ``cube`` (pseudo-cube): ``edge_nm``, ``body_diagonal_nm`` (the "large diagonal") or
         ``face_diagonal_nm``; ``rod`` (cylinder): ``length_nm``, ``diameter_nm``;
-        ``spheroid``: ``polar_diameter_nm``, ``equatorial_diameter_nm``.
+        ``spheroid``: ``polar_diameter_nm``, ``equatorial_diameter_nm``;
+        ``rhombohedron``: ``edge_nm``, ``angle_deg`` (rhombohedral angle, hematite
+        :data:`HEMATITE_RHOMBOHEDRON_ANGLE_DEG`; see :func:`rhombohedron_volume_surface`).
     method : {"volume", "surface", "volume_to_surface"}
         Equal volume (default; Mishchenko et al. 2002), equal surface area, or equal
         volume-to-surface ratio D = 6V/S (Grenfell & Warren 1999).
