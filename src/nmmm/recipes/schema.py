@@ -23,7 +23,9 @@ A recipe has these tables (units in the key names; lengths nm, angles degrees, f
     homogenization of a random ``microstructure`` (``method = "fft"``); its result is a new
     compound named ``name``, usable by the next levels.
 ``[pigment]`` + ``[binder]`` + ``[film]``   a pigmented paint film (Mie + radiative transfer,
-    :mod:`nmmm.layers.paint`), with clear coat and substrate.
+    :mod:`nmmm.layers.paint`), with clear coat and substrate; the pigment ``shape`` (sphere,
+    cube, rod, spheroid, rhombohedron with ``edge_nm`` + ``angle_deg``) maps to an
+    ``equivalent_sphere`` (:func:`nmmm.layers.distributions.equivalent_sphere_diameter`).
 ``[plate]``      a plate of one compound seen in transmission (gold-ruby glass).
 ``[thin_film]``  a coherent/incoherent layer stack (interference pigments).
 ``[effect]``     a flake (metallic / interference) paint BRDF (:mod:`nmmm.appearance.brdf`):
@@ -223,6 +225,7 @@ PIGMENT_SIZE_KEYS = {
     "cube": ({"edge_nm"}, {"body_diagonal_nm"}),
     "rod": ({"length_nm", "diameter_nm"},),
     "spheroid": ({"polar_diameter_nm", "equatorial_diameter_nm"},),
+    "rhombohedron": ({"edge_nm", "angle_deg"},),
 }
 
 
@@ -231,20 +234,23 @@ class Pigment(_Strict):
 
     compound: str
     fraction: Fraction
-    shape: Literal["sphere", "cube", "rod", "spheroid"] = "sphere"
+    shape: Literal["sphere", "cube", "rod", "spheroid", "rhombohedron"] = "sphere"
     diameter_nm: Positive | None = None
     body_diagonal_nm: Positive | None = None
     edge_nm: Positive | None = None
     length_nm: Positive | None = None
     polar_diameter_nm: Positive | None = None
     equatorial_diameter_nm: Positive | None = None
+    #: rhombohedral angle (deg) of a rhombohedron (with edge_nm); hematite's {01-12} faces: 85.7
+    angle_deg: Annotated[float, Field(gt=0.0, lt=120.0, allow_inf_nan=False)] | None = None
     equivalent_sphere: Literal["volume", "surface", "volume_to_surface"] = "volume"
     size_spread: Annotated[float, Field(ge=1.0, le=3.0)] = 1.0
     size_nodes: int = Field(default=24, ge=4, le=200)
     dependent_scattering: bool = False
 
     def dims(self) -> dict:
-        keys = ("diameter_nm", "body_diagonal_nm", "edge_nm", "length_nm", "polar_diameter_nm", "equatorial_diameter_nm")
+        keys = ("diameter_nm", "body_diagonal_nm", "edge_nm", "length_nm", "polar_diameter_nm", "equatorial_diameter_nm",
+                "angle_deg")
         return {k: getattr(self, k) for k in keys if getattr(self, k) is not None}
 
     @model_validator(mode="after")
