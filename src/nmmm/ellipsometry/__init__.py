@@ -8,6 +8,8 @@
   :func:`write_csv`, :func:`write_material_csv` — data files.
 - :class:`Parameter`, :class:`FitResult`, :func:`fit_psi_delta` — weighted least squares with
   uncertainties and correlations; :class:`FitAtBoundWarning` when a parameter ends on a bound.
+- :func:`fit_joint` — one fit over several data sets (films of one resin with different
+  thicknesses, several instruments) with shared parameters and per-data-set ones (``name[i]``).
 - :class:`EllipsometryModel`, :func:`read_model` — layered models with dispersion laws and a
   surface-roughness layer, from TOML.
 - :func:`point_by_point` — wavelength-by-wavelength inversion of one layer's n, k;
@@ -29,7 +31,7 @@ _EXPORTS = {
     "EllipsometryData": "data", "read_data": "data", "read_csv": "data", "read_woollam": "data",
     "write_csv": "data", "write_material_csv": "data",
     "Parameter": "fitting", "FitResult": "fitting", "fit_psi_delta": "fitting",
-    "FitAtBoundWarning": "fitting",
+    "FitAtBoundWarning": "fitting", "fit_joint": "joint", "joint_parameter_names": "joint",
     "EllipsometryModel": "model", "read_model": "model", "dispersion_material": "model",
     "roughness_material": "model",
     "point_by_point": "point_by_point", "PointByPointResult": "point_by_point", "kk_check": "point_by_point",
