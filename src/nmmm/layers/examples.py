@@ -90,11 +90,11 @@ def _write_csv(path, rows):
         wr.writerows(rows)
 
 
-def hematite_demo(output_dir) -> dict:
+def hematite_demo(output_dir, progress: bool = True) -> dict:
     """Hematite paint: reflectance at 5/7/10 %, CIELAB, grain-size darkening, KM vs AD.
 
     Writes PNG figures and CSV tables into ``output_dir`` and returns
-    ``{"title", "figures", "tables", "text"}``.
+    ``{"title", "figures", "tables", "text"}``; ``progress=False`` hides the tqdm bar.
     """
     import matplotlib
 
@@ -120,7 +120,7 @@ def hematite_demo(output_dir) -> dict:
         runs.append(("grain", dgl, 0.07, False))
 
     res = {}
-    for kind, dgl, f, dep in tqdm(runs, desc="hematite paint", leave=False):
+    for kind, dgl, f, dep in tqdm(runs, desc="hematite paint", leave=False, disable=not progress):
         entry = {}
         for sub_name, rho in (("white", 0.8), ("black", 0.0)):
             film = _film(pig, binder, dgl, f, rho, dependent=dep)

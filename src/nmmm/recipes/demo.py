@@ -4,7 +4,8 @@ packages' demo hooks, into one self-contained HTML report.
 - :data:`RECIPE_SECTIONS` — the shipped recipes run (with the hematite 5/7/10 % and
   grain-size series as serial sweeps of the same recipe).
 - :data:`HOOKS` — ``(title, "module:function")`` of the packages' demo hooks
-  (``demo(output_dir) -> {"title", "figures", "tables", "text"}``).
+  (``demo(output_dir) -> {"title", "figures", "tables", "text"}``); a hook that draws
+  progress bars takes ``progress: bool = True``, and gets the demo's flag.
 - :func:`run_demo` — runs every section, each guarded: a failing section becomes an error
   box in the report and the others go on. Returns ``(report_path, failed_titles)``.
 
@@ -15,6 +16,7 @@ available" and does not count as a failure; any other exception does.
 from __future__ import annotations
 
 import importlib
+import inspect
 import time
 import traceback
 import warnings
@@ -93,7 +95,16 @@ def _hematite_series(path, out, sec, progress):
                        f"L* = {L[-1]:.1f} at {HEMATITE_DIAGONALS_NM[-1]:g} nm.")
 
 
-def _hook_section(title, target, out):
+def _accepts_progress(fn) -> bool:
+    """Whether a hook takes a ``progress`` keyword (hooks that draw tqdm bars do)."""
+    try:
+        params = inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return False
+    return "progress" in params
+
+
+def _hook_section(title, target, out, progress=True):
     module_name, fn = target.split(":")
     try:
         module = importlib.import_module(module_name)
@@ -101,7 +112,9 @@ def _hook_section(title, target, out):
         if exc.name and (module_name == exc.name or module_name.startswith(exc.name + ".")):
             return None  # package not written yet
         raise
-    summary = getattr(module, fn)(out / module_name.replace(".", "_"))
+    hook = getattr(module, fn)
+    kw = {"progress": progress} if _accepts_progress(hook) else {}
+    summary = hook(out / module_name.replace(".", "_"), **kw)
     sec = hook_section(summary)
     sec["title"] = summary.get("title") or title
     return sec
@@ -128,7 +141,7 @@ def run_demo(output_dir="nmmm-demo", quick: bool = False, only=None, progress: b
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                sec = _recipe_section(target, out, progress) if kind == "recipe" else _hook_section(title, target, out)
+                sec = _recipe_section(target, out, progress) if kind == "recipe" else _hook_section(title, target, out, progress)
             if sec is None:
                 skipped.append(title)
                 continue
