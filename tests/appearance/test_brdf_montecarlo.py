@@ -1,0 +1,344 @@
+"""Monte-Carlo check of the metallic-paint BRDF for ABSORBING paints (issue 8).
+
+:class:`nmmm.appearance.brdf.PaintBRDF` adds flake–flake, flake–base and coat-underside
+interreflections as a smooth diffuse term (``"multiple"``) whose amount for absorbing
+paints comes from an angle-averaged bounce model; the white-furnace test only checks
+it for lossless paints. Here an independent photon tracer of the same physical model
+(as documented in brdf.py / flakes.py) gives the reference:
+
+    air | smooth clear coat, n = 1.5 | flake layer of optical depth τ | Lambertian base ρ
+
+- top interface: unpolarised Fresnel (own formula, Born & Wolf §1.5) both ways, total
+  internal reflection beyond the critical angle;
+- flake layer: flakes spread uniformly in depth, τ = flake area per unit area; a ray
+  along u crossing a depth slice dτ meets a flake of normal m with probability
+  p(m)|u·m| dω_m dτ / |u_z| (p the tilt density per sr). Sampled by *delta tracking*:
+  candidate events at rate 1/|u_z| per unit τ, a normal drawn from p
+  (``TiltDistribution.sample``), accepted as a real collision with probability |u·m|
+  (so the mean projected area a(u) of the model is never used). Flakes are two-sided
+  opaque mirrors, reflectance R(|u·m|) from the complex Fresnel formula (own code) with
+  the aluminium n, k of ``aluminium_flakes()``;
+- base: Lambertian, albedo ρ, directly under the flake layer.
+
+Photons carry a spectral weight (one geometry for all wavelengths, weights × R(λ), ×ρ);
+at the coat the escaping fraction T is tallied and the rest (1 − T) goes on reflected
+(weight splitting); Russian roulette below 1e-3. Estimates, with standard errors from
+the per-photon spread: (a) the directional-hemispherical albedo (the Dirac Fresnel
+reflection added analytically), (b) the BRDF averaged over coarse outgoing bins,
+∫_bin f cos θ dω / ∫_bin cos θ dω (subsurface light only; the Dirac is not in
+``evaluate``). Run this file directly (``python tests/appearance/test_brdf_montecarlo.py``)
+for the full comparison table.
+
+Measured (2·10^5 photons per incidence, ρ = 0.3, σ = 12°, Al Rakić, n = 1.5, smooth
+coat; λ = 550 nm, MC standard error ≈ 0.0008; 450 and 650 nm differ by < 0.01):
+
+    directional-hemispherical albedo      τ = 1                     τ = 2
+    θi      MC      model   model − MC    MC      model   model − MC
+     0°   0.394   0.414   +0.020        0.448   0.556   +0.108
+    30°   0.372   0.390   +0.019        0.423   0.536   +0.113
+    45°   0.353   0.372   +0.020        0.402   0.520   +0.119
+    60°   0.356   0.375   +0.019        0.402   0.521   +0.119
+    75°   0.459   0.475   +0.016        0.493   0.597   +0.103
+
+    split at θi = 45°, 550 nm     Fresnel  one flake  base only  multiple
+    MC, τ = 1                     0.050    0.207      0.0174     0.078
+    model, τ = 1                  0.050    0.207      0.0174     0.098  (+25 %)
+    MC, τ = 2                     0.050    0.237      0.0024     0.112
+    model, τ = 2                  0.050    0.237      0.0025     0.231  (×2.05)
+
+The single-scattering terms (one flake; base with its coat interreflections) agree with
+the tracer to < 0.002 — those are asserted. The ``"multiple"`` term is too large for
+absorbing paints: its angular factor (1 − E⁰(θi)) is right (the tracer's multiple
+albedo / (1 − E⁰(θi)) is flat in θi to ±5 %), but F_ms is 0.150 (τ = 1) and 0.343
+(τ = 2) where the tracer gives 0.12 and 0.17. Likely cause: the bounce operator of
+``_Tables._ms_factor`` keeps only single flake scattering per pass, so in the lossless
+reference the flake–flake paths are dropped and ms/ms⁰ is weighted towards short
+(little-absorbed) paths. The tracer's multiply scattered light is also not Lambertian:
+it is brighter on the specular side (at θi = 45°, θo 40–60°: 0.041 / 0.023 / 0.016 1/sr
+for |φo| in 0–60° / 60–120° / 120–180° against the model's flat 0.033 for τ = 1).
+The total-albedo and binned-BRDF comparisons are therefore ``xfail(strict=True)`` with
+these numbers (see brdf.py, Notes).
+"""
+
+import numpy as np
+import pytest
+
+from nmmm.appearance.brdf import metallic_paint
+from nmmm.appearance.flakes import aluminium_flakes, gaussian_tilt
+
+N_COAT = 1.5
+RHO = 0.3
+SIGMA_DEG = 12.0
+WAVELENGTHS = np.array([450.0, 550.0, 650.0])
+
+
+# --------------------------------------------------------------------------------------
+# independent Fresnel formulae (Born & Wolf §1.5.2), unpolarised
+
+
+def fresnel_dielectric(cos_i, n1, n2):
+    """(R_s + R_p)/2 for real indices; 1 beyond the critical angle."""
+    cos_i = np.clip(np.abs(cos_i), 0.0, 1.0)
+    sin_t2 = (n1 / n2) ** 2 * (1.0 - cos_i ** 2)
+    tir = sin_t2 >= 1.0
+    cos_t = np.sqrt(np.clip(1.0 - sin_t2, 0.0, 1.0))
+    with np.errstate(invalid="ignore", divide="ignore"):  # 0/0 at grazing TIR, replaced by 1
+        rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
+        rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t)
+    return np.where(tir | (cos_i == 0), 1.0, 0.5 * (rs * rs + rp * rp))
+
+
+def fresnel_metal(cos_i, n1, n2):
+    """(|r_s|² + |r_p|²)/2 from a real index n1 onto complex n2 = n + ik; broadcasts
+    ``cos_i`` (...) against ``n2`` (L,) -> (..., L)."""
+    c = np.clip(np.abs(cos_i), 0.0, 1.0)[..., None]
+    n2 = np.asarray(n2, complex)
+    cos_t = np.sqrt(1.0 - (n1 / n2) ** 2 * (1.0 - c ** 2) + 0j)
+    rs = (n1 * c - n2 * cos_t) / (n1 * c + n2 * cos_t)
+    rp = (n2 * c - n1 * cos_t) / (n2 * c + n1 * cos_t)
+    return 0.5 * (np.abs(rs) ** 2 + np.abs(rp) ** 2)
+
+
+# --------------------------------------------------------------------------------------
+# the photon tracer
+
+
+def trace_paint(theta_i_deg, tau, nk_metal, tilt, rho=RHO, n=N_COAT, n_photons=200_000, theta_edges_deg=(),
+                phi_edges_deg=(), seed=1, max_events=100_000):
+    """Trace photons incident at ``theta_i_deg`` (azimuth 180°, so the mirror direction is
+    at φ = 0°) into the paint.
+
+    Returns a dict: ``albedo`` (L,) and ``albedo_se`` (directional-hemispherical
+    reflectance, Dirac included), ``specular`` (L,), and, when bin edges are given,
+    ``bins`` / ``bins_se`` (nθ, nφ, L): the bin-averaged BRDF (1/sr) of the subsurface
+    light, φ folded onto [0°, 180°] (the paint is isotropic).
+    """
+    rng = np.random.default_rng(seed)
+    L = np.size(nk_metal)
+    N = int(n_photons)
+    te = np.radians(np.asarray(theta_edges_deg, float))
+    pe = np.asarray(phi_edges_deg, float)
+    nb_t, nb_p = max(te.size - 1, 0), max(pe.size - 1, 0)
+    # incident: external direction of travel, refracted into the coat
+    ti = np.radians(theta_i_deg)
+    mu_i = np.cos(ti)
+    F_in = float(fresnel_dielectric(mu_i, 1.0, n))
+    s_int = np.sin(ti) / n
+    d = np.tile([s_int, 0.0, -np.sqrt(1.0 - s_int * s_int)], (N, 1))  # travelling down, towards +x
+    w = np.full((N, L), 1.0 - F_in)
+    depth = np.zeros(N)  # optical depth below the top of the flake layer, 0..tau
+    idx = np.arange(N)
+    esc_total = np.zeros((N, L))
+    n_flake = np.zeros(N, int)  # real flake hits, base hits, coat reflections per photon
+    n_base = np.zeros(N, int)
+    n_coat = np.zeros(N, int)
+    esc_single = np.zeros(L)  # the model's "flakes" term: one flake, straight out
+    esc_base = np.zeros(L)  # the model's "base" term: no flake hit at all
+    esc_bins = np.zeros((N, nb_t, nb_p, L)) if nb_t and nb_p else None
+    for _ in range(max_events):
+        if idx.size == 0:
+            break
+        uz = d[:, 2]
+        # candidate event (majorant rate 1/|u_z| per unit optical depth)
+        ds = -np.log1p(-rng.random(idx.size)) * np.abs(uz)
+        new = depth + np.where(uz < 0, ds, -ds)
+        at_base = new >= tau
+        at_top = new <= 0.0
+        inside = ~(at_base | at_top)
+        # --- flake candidates: draw a normal, accept with probability |u·m|
+        if np.any(inside):
+            k = np.flatnonzero(inside)
+            m = tilt.sample(k.size, rng)
+            c = np.sum(d[k] * m, axis=1)
+            real = rng.random(k.size) < np.abs(c)
+            kr = k[real]
+            if kr.size:
+                cr = c[real]
+                mr = m[real]
+                d[kr] = d[kr] - 2.0 * cr[:, None] * mr
+                w[kr] *= fresnel_metal(cr, n, nk_metal)
+                n_flake[idx[kr]] += 1
+            depth[inside] = new[inside]
+        # --- base: Lambertian reflection (cosine-weighted upward direction), weight × ρ
+        if np.any(at_base):
+            k = np.flatnonzero(at_base)
+            u1, u2 = rng.random(k.size), rng.random(k.size)
+            r = np.sqrt(u1)
+            phi = 2 * np.pi * u2
+            d[k] = np.column_stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1.0 - u1)])
+            w[k] *= rho
+            depth[k] = tau
+            n_base[idx[k]] += 1
+        # --- the coat's top (the clear binder between adds nothing): split escape/reflect
+        if np.any(at_top):
+            k = np.flatnonzero(at_top)
+            dk = d[k]
+            sxy2 = n * n * (dk[:, 0] ** 2 + dk[:, 1] ** 2)
+            ok = sxy2 < 1.0
+            mu_o = np.sqrt(np.clip(1.0 - sxy2, 0.0, 1.0))
+            T = np.where(ok, 1.0 - fresnel_dielectric(mu_o, 1.0, n), 0.0)
+            out_w = w[k] * T[:, None]
+            esc_total[idx[k]] += out_w
+            gk = idx[k]
+            esc_single += out_w[(n_flake[gk] == 1) & (n_base[gk] == 0) & (n_coat[gk] == 0)].sum(axis=0)
+            esc_base += out_w[n_flake[gk] == 0].sum(axis=0)
+            n_coat[gk] += 1
+            if esc_bins is not None and np.any(ok):
+                th_o = np.arccos(mu_o)
+                ph_o = np.degrees(np.abs(np.arctan2(dk[:, 1], dk[:, 0])))  # folded onto [0, 180]
+                it = np.searchsorted(te, th_o, side="right") - 1
+                ip = np.searchsorted(pe, ph_o, side="right") - 1
+                good = ok & (it >= 0) & (it < nb_t) & (ip >= 0) & (ip < nb_p)
+                np.add.at(esc_bins, (idx[k][good], it[good], ip[good]), out_w[good])
+            w[k] *= (1.0 - T)[:, None]
+            d[k, 2] = -dk[:, 2]
+            depth[k] = 0.0
+        # --- Russian roulette on the largest spectral weight
+        wmax = w.max(axis=1)
+        low = wmax < 1e-3
+        if np.any(low):
+            kl = np.flatnonzero(low)
+            survive = rng.random(kl.size) < 0.1
+            w[kl[survive]] *= 10.0
+            w[kl[~survive]] = 0.0
+        alive = w.max(axis=1) > 0
+        if not np.all(alive):
+            idx, d, w, depth = idx[alive], d[alive], w[alive], depth[alive]
+    else:  # pragma: no cover
+        raise RuntimeError("photons still alive after max_events")
+    F_spec = np.full(L, F_in)
+    out = {
+        "albedo": F_spec + esc_total.mean(axis=0),
+        "albedo_se": esc_total.std(axis=0) / np.sqrt(N),
+        "specular": F_spec,
+        "single_flake": esc_single / N,
+        "base": esc_base / N,
+        "multiple": esc_total.mean(axis=0) - (esc_single + esc_base) / N,
+    }
+    if esc_bins is not None:
+        proj = 0.5 * (np.sin(te[1:]) ** 2 - np.sin(te[:-1]) ** 2)[:, None] * (2 * np.radians(np.diff(pe)))[None, :]
+        out["bins"] = esc_bins.mean(axis=0) / proj[..., None]
+        out["bins_se"] = esc_bins.std(axis=0) / np.sqrt(N) / proj[..., None]
+    return out
+
+
+def _wi(theta_deg):
+    t = np.radians(theta_deg)
+    return np.array([-np.sin(t), 0.0, np.cos(t)])  # light from φ = 180°: mirror at φ = 0°
+
+
+# --------------------------------------------------------------------------------------
+# fixtures and tests
+
+THETA_EDGES = (0.0, 20.0, 40.0, 60.0, 80.0)
+PHI_EDGES = (0.0, 60.0, 120.0, 180.0)
+N_PHOTONS = 60_000
+MODEL_TOL_ALBEDO = 0.01  # absolute: ~3 % of these albedos (model tables and quadrature)
+MODEL_TOL_BINS = 0.10  # relative, on the bin-averaged BRDF
+N_SE = 4.0
+
+
+@pytest.fixture(scope="module")
+def setup():
+    optics = aluminium_flakes()
+    return optics.material.nk(WAVELENGTHS), gaussian_tilt(SIGMA_DEG)
+
+
+@pytest.fixture(scope="module")
+def traces(setup):
+    nk, tilt = setup
+    out = {}
+    for tau in (1.0, 2.0):
+        for th in (0.0, 45.0, 70.0):
+            edges = (THETA_EDGES, PHI_EDGES) if th == 45.0 else ((), ())
+            out[tau, th] = trace_paint(th, tau, nk, tilt, n_photons=N_PHOTONS, theta_edges_deg=edges[0],
+                                       phi_edges_deg=edges[1], seed=int(10 * tau + th))
+    return out
+
+
+def _paint(tau):
+    return metallic_paint(optical_depth=tau, tilt=SIGMA_DEG, body_reflectance=RHO, coat=N_COAT)
+
+
+def _hemisphere_component(paint, theta_i, components):
+    """∫ f cos θ dω over the hemisphere for some BRDF components (bin averages × bin
+    projected solid angles; fine bins so the flake lobe is resolved)."""
+    te = np.linspace(0.0, 90.0, 19)
+    pe = np.linspace(0.0, 360.0, 25)
+    b = paint.bin_average(WAVELENGTHS, _wi(theta_i), te, pe, components=components, n_quad=8)
+    t = np.radians(te)
+    proj = 0.5 * (np.sin(t[1:]) ** 2 - np.sin(t[:-1]) ** 2)[:, None] * np.radians(np.diff(pe))[None, :]
+    return np.einsum("ab,abl->l", proj, b)
+
+
+def test_tracer_white_furnace_and_saunderson(setup):
+    """The tracer itself: lossless flakes (|n2| → ∞) over a white base reflect all light;
+    without flakes it gives Saunderson's directional reflectance
+    R = F(θ) + (1 − F(θ)) (1 − r_i) ρ / (1 − ρ r_i), r_i = 2∫ R_int μ dμ computed here
+    (0.596 for n = 1.5, Judd 1942)."""
+    _, tilt = setup
+    r = trace_paint(45.0, 2.0, np.array([1e8j]), tilt, rho=1.0, n_photons=20_000, seed=3)
+    assert r["albedo"][0] == pytest.approx(1.0, abs=1e-3)
+    mu = np.linspace(0.0, 1.0, 200_001)
+    r_i = 2 * np.trapezoid(fresnel_dielectric(mu, N_COAT, 1.0) * mu, mu)
+    assert r_i == pytest.approx(0.596, abs=2e-3)
+    for th in (0.0, 60.0):
+        F = fresnel_dielectric(np.cos(np.radians(th)), 1.0, N_COAT)
+        ref = F + (1 - F) * (1 - r_i) * RHO / (1 - RHO * r_i)
+        r = trace_paint(th, 0.0, np.array([1e8j]), tilt, n_photons=50_000, seed=4)
+        assert abs(r["albedo"][0] - ref) < N_SE * r["albedo_se"][0] + 1e-3
+
+
+@pytest.mark.parametrize("tau", [1.0, 2.0])
+def test_single_scattering_terms_match_mc(traces, tau):
+    """The model's "flakes" and "base" terms (hemispherically integrated) equal the
+    tracer's photons that met one flake and left, and those that never met a flake."""
+    paint = _paint(tau)
+    for th in (0.0, 45.0, 70.0):
+        r = traces[tau, th]
+        tol = N_SE * r["albedo_se"] + 0.003
+        flakes = _hemisphere_component(paint, th, ("flakes",))
+        base = _hemisphere_component(paint, th, ("base",))
+        assert np.all(np.abs(flakes - r["single_flake"]) < tol), (tau, th, flakes, r["single_flake"])
+        assert np.all(np.abs(base - r["base"]) < tol), (tau, th, base, r["base"])
+        assert np.allclose(paint.specular_reflectance(WAVELENGTHS, _wi(th)), r["specular"], atol=1e-3)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "PaintBRDF's multiple-scattering term overestimates absorbing paints: total albedo model − MC "
+    "= +0.016…+0.020 (τ = 1) and +0.10…+0.12 (τ = 2) at 0–75°, i.e. the multiple term is 1.25× (τ = 1) "
+    "and 2.05× (τ = 2) the traced one; see brdf.py Notes"))
+@pytest.mark.parametrize("tau", [1.0, 2.0])
+def test_total_albedo_matches_mc(traces, tau):
+    paint = _paint(tau)
+    for th in (0.0, 45.0, 70.0):
+        r = traces[tau, th]
+        a = paint.albedo(WAVELENGTHS, _wi(th))
+        tol = N_SE * r["albedo_se"] + MODEL_TOL_ALBEDO
+        assert np.all(np.abs(a - r["albedo"]) < tol), (tau, th, a, r["albedo"])
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "bin-averaged BRDF at θi = 45°: the model's Lambertian multiple-scattering lobe is too bright away "
+    "from the specular side (τ = 1, θo 60–80°, |φo| 120–180°: model 0.041 vs MC 0.026 1/sr; τ = 2: "
+    "0.079 vs 0.023), where the traced multiple light is peaked towards the specular side; see brdf.py Notes"))
+@pytest.mark.parametrize("tau", [1.0, 2.0])
+def test_binned_brdf_matches_mc(traces, tau):
+    r = traces[tau, 45.0]
+    b = _paint(tau).bin_average(WAVELENGTHS, _wi(45.0), THETA_EDGES, PHI_EDGES, n_quad=24)
+    tol = N_SE * r["bins_se"] + MODEL_TOL_BINS * r["bins"]
+    assert np.all(np.abs(b - r["bins"]) < tol), (tau, b[..., 1], r["bins"][..., 1])
+
+
+if __name__ == "__main__":  # the comparison table
+    optics = aluminium_flakes()
+    nk_al, tilt_g = optics.material.nk(WAVELENGTHS), gaussian_tilt(SIGMA_DEG)
+    for tau_ in (1.0, 2.0):
+        paint_ = _paint(tau_)
+        for th_ in (0.0, 30.0, 45.0, 60.0, 75.0):
+            r_ = trace_paint(th_, tau_, nk_al, tilt_g, n_photons=200_000)
+            a_ = paint_.albedo(WAVELENGTHS, _wi(th_))
+            print(f"tau={tau_:g} theta_i={th_:4.0f}  MC {np.round(r_['albedo'], 4)} ± {np.round(r_['albedo_se'], 4)}"
+                  f"  model {np.round(a_, 4)}  model-MC {np.round(a_ - r_['albedo'], 4)}"
+                  f"  (MC one flake {np.round(r_['single_flake'], 4)}, base {np.round(r_['base'], 4)},"
+                  f" multiple {np.round(r_['multiple'], 4)})")
