@@ -87,3 +87,34 @@ def test_demo_hook(tmp_path):
     assert all(abs(row["z"]) < 3 for row in s["tables"]["epoxy_fit"])
     h = s["tables"]["hematite"]
     assert max(h["max_dev_ordinary"], h["max_dev_extraordinary"]) < 6 * h["median_sigma_n"]
+
+
+def test_joint_fit_of_two_files(tmp_path):
+    """'fit a.csv b.csv --model ... --model ... --shared A,B': joint fit, a plot per file; bad
+    combinations of options are usage errors."""
+    runner = CliRunner()
+    files = []
+    for t in (300.0, 900.0):
+        truth = tmp_path / f"truth{t:.0f}.toml"
+        truth.write_text(MODEL % (t, 1.56))
+        files.append(tmp_path / f"film{t:.0f}.csv")
+        r = runner.invoke(ellipsometry, ["simulate", "--model", str(truth), "--wavelengths", "400:900:20",
+                                         "--angles", "70", "--sigma-psi", "0.02", "--sigma-delta", "0.05",
+                                         "--seed", str(int(t)), "-o", str(files[-1])])
+        assert r.exit_code == 0, r.output
+    starts = []
+    for t in (305.0, 895.0):
+        starts.append(tmp_path / f"start{t:.0f}.toml")
+        starts[-1].write_text(MODEL % (t, 1.54))
+    out = tmp_path / "joint"
+    args = ["fit", str(files[0]), str(files[1]), "--model", str(starts[0]), "--model", str(starts[1]),
+            "--shared", "A,B", "-o", str(out), "--save-material", "film"]
+    r = runner.invoke(ellipsometry, args)
+    assert r.exit_code == 0, r.output
+    assert "film.thickness_nm[1]" in r.output and "film.A " in r.output and "joint fit of 2" in r.output
+    assert (out / "film300_fit.png").is_file() and (out / "film900_fit.png").is_file()
+    assert (out / "film_nk.csv").is_file()
+    r = runner.invoke(ellipsometry, ["fit", str(files[0]), str(files[1]), "--model", str(starts[0])])
+    assert r.exit_code != 0 and "--shared" in r.output
+    r = runner.invoke(ellipsometry, args[:3] + ["--model", str(starts[0])] * 3 + ["--shared", "A"])
+    assert r.exit_code != 0 and "one per data file" in r.output

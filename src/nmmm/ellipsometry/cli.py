@@ -6,6 +6,8 @@ Commands
   parameters; prints values ± uncertainties and the correlation matrix, writes a plot of data
   against model (``--output-dir``), optionally the fitted constants of layers as Material CSVs
   (``--save-material epoxy``) and a point-by-point inversion (``--point-by-point epoxy``).
+  ``nmmm ellipsometry fit a.csv b.csv --model model.toml --shared A,B,C`` fits several data
+  files jointly (:func:`nmmm.ellipsometry.joint.fit_joint`).
 - ``nmmm ellipsometry pseudo data.csv`` — pseudo-dielectric function of a bulk sample, as a
   Material CSV.
 - ``nmmm ellipsometry simulate --model model.toml -o data.csv`` — synthetic data of a model.
@@ -44,43 +46,74 @@ def ellipsometry():
 
 
 @ellipsometry.command("fit")
-@click.argument("data_file", type=click.Path(dir_okay=False))
-@click.option("--model", "model_file", required=True, type=click.Path(dir_okay=False), help="TOML model file.")
+@click.argument("data_files", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--model", "model_files", required=True, multiple=True, type=click.Path(dir_okay=False),
+              help="TOML model file: one for all data files, or one per data file (repeat --model).")
+@click.option("--shared", default=None,
+              help="Joint fit of several data files: comma-separated parameters common to all "
+                   "(e.g. A,B,C); the others are fitted per file as name[i].")
 @click.option("--format", "fmt", type=click.Choice(["csv", "woollam"]), default=None,
               help="Data format (default: from the suffix: .csv -> csv, else woollam).")
 @click.option("--output-dir", "-o", type=click.Path(file_okay=False), default=".", show_default=True,
               help="Where plots and files go.")
-@click.option("--save-material", multiple=True, help="Layer whose fitted n, k to write as a Material CSV (repeatable).")
-@click.option("--point-by-point", "pbp_layer", default=None, help="Also invert this layer's n, k wavelength by wavelength.")
+@click.option("--save-material", multiple=True, help="Layer whose fitted n, k to write as a Material CSV (repeatable; "
+              "in a joint fit, from the first data file's model).")
+@click.option("--point-by-point", "pbp_layer", default=None, help="Also invert this layer's n, k wavelength by wavelength "
+              "(one data file only).")
 @click.option("--no-plot", is_flag=True, help="Do not write the plot.")
-def fit_cmd(data_file, model_file, fmt, output_dir, save_material, pbp_layer, no_plot):
-    """Fit MODEL's free parameters to DATA_FILE (all angles at once)."""
+def fit_cmd(data_files, model_files, shared, fmt, output_dir, save_material, pbp_layer, no_plot):
+    """Fit MODEL's free parameters to DATA_FILES (all angles at once); several data files with
+    --shared are fitted jointly (e.g. films of one resin with different thicknesses)."""
     from nmmm.ellipsometry.data import read_data, write_material_csv
     from nmmm.ellipsometry.model import read_model
 
-    data = read_data(data_file, format=fmt)
-    model = read_model(model_file)
-    click.echo(f"data: {data!r}")
-    click.echo(f"model: {model.name}")
-    result = model.fit(data)
+    joint = len(data_files) > 1 or shared is not None
+    if len(data_files) > 1 and shared is None:
+        raise click.UsageError("several data files are fitted jointly: say which parameters they share with "
+                               "--shared (e.g. --shared A,B,C), or fit them one at a time")
+    if len(model_files) not in (1, len(data_files)):
+        raise click.UsageError(f"give one --model for all data files or one per data file; got {len(model_files)} "
+                               f"models for {len(data_files)} data files")
+    if joint and pbp_layer:
+        raise click.UsageError("--point-by-point needs a single data file")
+    datas = [read_data(f, format=fmt) for f in data_files]
+    models = [read_model(m) for m in model_files]
+    if len(models) == 1:
+        models = models * len(datas)
+    for d in datas:
+        click.echo(f"data: {d!r}")
+    click.echo(f"model: {', '.join(dict.fromkeys(m.name for m in models))}")
+    if joint:
+        from nmmm.ellipsometry.joint import fit_joint
+
+        result = fit_joint(list(zip(datas, models)), shared=shared)
+        click.echo(f"joint fit of {len(datas)} data sets, shared: {shared}")
+        useds, psis, deltas = result.extra["data"], result.extra["psi_deg"], result.extra["delta_deg"]
+        fitted = result.extra["models"][0]
+        for i, (f, c2) in enumerate(zip(data_files, result.extra["chi2_per_dataset"])):
+            click.echo(f"  [{i}] {f}: chi2 = {c2:.6g}")
+    else:
+        result = models[0].fit(datas[0])
+        useds, psis, deltas = [result.extra["data"]], [result.extra["psi_deg"]], [result.extra["delta_deg"]]
+        fitted = result.extra["model"]
     click.echo(result.summary())
     click.echo("\ncorrelation matrix:")
     click.echo(result.correlation_table())
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
-    fitted = result.extra["model"]
     if not no_plot:
         from nmmm.ellipsometry.plotting import plot_fit
 
-        used = result.extra["data"]
-        p = plot_fit(used, result.extra["psi_deg"], result.extra["delta_deg"], out / f"{Path(data_file).stem}_fit.png",
-                     title=f"{model.name}: MSE {result.mse:.3g}")
-        click.echo(f"\nplot: {p}")
+        for f, used, psi, delta, model in zip(data_files, useds, psis, deltas, models):
+            p = plot_fit(used, psi, delta, out / f"{Path(f).stem}_fit.png",
+                         title=f"{model.name}: MSE {result.mse:.3g}" + (" (joint)" if joint else ""))
+            click.echo(f"\nplot: {p}")
     for layer in save_material:
         mat = fitted.material(layer)
-        w = np.unique(data.wavelength_nm)
-        path = write_material_csv(out / f"{layer}_nk.csv", w, mat.nk(w), name=f"{layer} (fitted {model.name})",
-                                  reference=f"ellipsometry fit of {Path(data_file).name}, MSE {result.mse:.3g}")
+        w = np.unique(np.concatenate([d.wavelength_nm for d in datas]))
+        what = ", ".join(Path(f).name for f in data_files)
+        path = write_material_csv(out / f"{layer}_nk.csv", w, mat.nk(w), name=f"{layer} (fitted {models[0].name})",
+                                  reference=f"ellipsometry {'joint ' if joint else ''}fit of {what}, MSE {result.mse:.3g}")
         click.echo(f"material: {path}")
     if pbp_layer:
         from nmmm.ellipsometry.point_by_point import kk_check, point_by_point
