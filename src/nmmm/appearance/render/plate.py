@@ -37,6 +37,9 @@ mirror image F(θo, λ) L_env(mirror of ωo)).
   BRDF. Candidate flakes per tile are found from a grid of flake normals around the
   tile's half vector, so the cost scales with the number of glints, not of flakes.
   Deterministic: the same flakes, cameras and lights give the same image.
+  A flake wider than a pixel on the image (close-up and macro views) spreads this power
+  over the pixels its projected ellipse covers, in proportion to the covered area
+  (``render_plate(area_splat=True)``), conserving Σ L Ω_pix.
 
 Public objects
 --------------
@@ -338,6 +341,7 @@ class SpectralImage:
 # numba kernels
 
 _NT = 181  # table nodes over 0..90 deg (0.5 deg), as in nmmm.appearance.brdf
+_SUPERSAMPLE = 8  # sub-pixel grid (per axis) of the glint footprint coverage on boundary pixels
 
 
 def _bilinear_py(coarse, ri, rf, ci, cf, out):
@@ -420,12 +424,41 @@ if _nb is not None:
             out[k] = float(x >> np.uint64(11)) / 9007199254740992.0
         return out
 
+    @_nb.njit(cache=True, fastmath=True)
+    def _ellipse_coverage(x0, y0, a1x, a1y, a2x, a2y, idet):
+        """Fraction of the unit pixel [x0, x0 + 1] × [y0, y0 + 1] (relative to the ellipse
+        centre) inside the ellipse {s A1 + t A2 : s² + t² <= 1}: 1 when its four corners are
+        inside (the ellipse is convex), else the fraction of an 8 × 8 grid of sub-pixel
+        centres inside (error <= 1/64 of a pixel per boundary pixel, unbiased on average)."""
+        inside = 0
+        for cy in range(2):
+            for cx in range(2):
+                x = x0 + cx
+                y = y0 + cy
+                s = (a2y * x - a2x * y) * idet
+                t = (-a1y * x + a1x * y) * idet
+                if s * s + t * t <= 1.0:
+                    inside += 1
+        if inside == 4:
+            return 1.0
+        ns = _SUPERSAMPLE
+        cnt = 0
+        for iy in range(ns):
+            y = y0 + (iy + 0.5) / ns
+            for ix in range(ns):
+                x = x0 + (ix + 0.5) / ns
+                s = (a2y * x - a2x * y) * idet
+                t = (-a1y * x + a1x * y) * idet
+                if s * s + t * t <= 1.0:
+                    cnt += 1
+        return cnt / (ns * ns)
+
     @_nb.njit(parallel=True, cache=True, fastmath=True)
     def _glint_tiles(fill, offsets, rec_pix, rec_w, rec_th, rec_li, counts,
                      cam, cam_r, cam_u, cam_f, tx, ty, sx, sy, W, H,
                      hx, hy, cw, ch, i0, i1, j0, j1,
-                     fpos, fnrm, farea, fzeta, G, gstart_all, gorder_all,
-                     lkind, lvec, lscale, n, sigma, cut, a_tab, astep, randomize, seed):
+                     fpos, fnrm, farea, fdiam, fzeta, G, gstart_all, gorder_all,
+                     lkind, lvec, lscale, n, sigma, cut, a_tab, astep, randomize, seed, splat):
         """One pass over the visible tiles (rows j in parallel): count (fill=False) or
         write (fill=True) the glint records (pixel, weight, angles, light)."""
         pix_sa = (2 * tx / W) * (2 * ty / H)
@@ -566,29 +599,111 @@ if _nb is not None:
                                 zc = dx * cam_f[0] + dy * cam_f[1] + dz * cam_f[2]
                                 if zc <= 0:
                                     continue
-                                u = (dx * cam_r[0] + dy * cam_r[1] + dz * cam_r[2]) / (zc * tx) - sx
-                                v = (dx * cam_u[0] + dy * cam_u[1] + dz * cam_u[2]) / (zc * ty) - sy
-                                col = int(math.floor((u + 1) * 0.5 * W))
-                                row = int(math.floor((1 - v) * 0.5 * H))
-                                if col < 0 or col >= W or row < 0 or row >= H:
+                                uc = (dx * cam_r[0] + dy * cam_r[1] + dz * cam_r[2]) / zc
+                                vc = (dx * cam_u[0] + dy * cam_u[1] + dz * cam_u[2]) / zc
+                                u = uc / tx - sx
+                                v = vc / ty - sy
+                                colf = (u + 1) * 0.5 * W
+                                rowf = (1 - v) * 0.5 * H
+                                # projected footprint of the flake disc (radius rho, normal m):
+                                # affine (Jacobian) image of the disc at its centre, an ellipse
+                                # c + s A1 + t A2 (s² + t² <= 1) in pixel units
+                                rho = 0.5 * fdiam[k]
+                                if abs(mx) <= abs(my):
+                                    e1x, e1y, e1z = 0.0, -mz, my  # x̂ × m (unnormalised, |.| >= 1/√2)
+                                else:
+                                    e1x, e1y, e1z = mz, 0.0, -mx  # ŷ × m
+                                en = math.sqrt(e1x * e1x + e1y * e1y + e1z * e1z)
+                                e1x /= en
+                                e1y /= en
+                                e1z /= en
+                                e2x = my * e1z - mz * e1y
+                                e2y = mz * e1x - mx * e1z
+                                e2z = mx * e1y - my * e1x
+                                # d(col)/dX = W/2 (r - uc f) / (zc tx); d(row)/dX = -H/2 (up - vc f) / (zc ty)
+                                kc = rho * 0.5 * W / (zc * tx)
+                                kr = -rho * 0.5 * H / (zc * ty)
+                                a1x = kc * ((cam_r[0] - uc * cam_f[0]) * e1x + (cam_r[1] - uc * cam_f[1]) * e1y
+                                            + (cam_r[2] - uc * cam_f[2]) * e1z)
+                                a2x = kc * ((cam_r[0] - uc * cam_f[0]) * e2x + (cam_r[1] - uc * cam_f[1]) * e2y
+                                            + (cam_r[2] - uc * cam_f[2]) * e2z)
+                                a1y = kr * ((cam_u[0] - vc * cam_f[0]) * e1x + (cam_u[1] - vc * cam_f[1]) * e1y
+                                            + (cam_u[2] - vc * cam_f[2]) * e1z)
+                                a2y = kr * ((cam_u[0] - vc * cam_f[0]) * e2x + (cam_u[1] - vc * cam_f[1]) * e2y
+                                            + (cam_u[2] - vc * cam_f[2]) * e2z)
+                                ex = math.sqrt(a1x * a1x + a2x * a2x)  # bounding-box half sizes
+                                ey = math.sqrt(a1y * a1y + a2y * a2y)
+                                det = a1x * a2y - a2x * a1y
+                                area = splat and max(ex, ey) > 0.5 and abs(det) > 1e-12
+                                col = int(math.floor(colf))
+                                row = int(math.floor(rowf))
+                                if area:
+                                    c0 = max(int(math.floor(colf - ex)), 0)
+                                    c1 = min(int(math.floor(colf + ex)), W - 1)
+                                    r0 = max(int(math.floor(rowf - ey)), 0)
+                                    r1 = min(int(math.floor(rowf + ey)), H - 1)
+                                    if c0 > c1 or r0 > r1:
+                                        continue
+                                elif col < 0 or col >= W or row < 0 or row >= H:
                                     continue
                                 ang = math.acos(min(1.0, ca))
                                 g = gnorm * math.exp(-ang * ang * inv2s2)
                                 cosa = zc / d
                                 omega = pix_sa * cosa * cosa * cosa
                                 wgt = e * farea[k] * c / jz * g / (omega * d * d)
+                                th0 = 0.0
+                                th1 = 0.0
+                                th2 = 0.0
+                                th3 = 0.0
                                 if fill:
-                                    o = base + cnt
-                                    rec_pix[o] = row * W + col
-                                    rec_w[o] = wgt
-                                    rec_th[o, 0] = math.degrees(math.acos(min(1.0, lz)))
-                                    rec_th[o, 1] = math.degrees(math.acos(min(1.0, fz)))
-                                    rec_th[o, 2] = math.degrees(math.acos(min(1.0, c)))
+                                    th0 = math.degrees(math.acos(min(1.0, lz)))
+                                    th1 = math.degrees(math.acos(min(1.0, fz)))
+                                    th2 = math.degrees(math.acos(min(1.0, c)))
                                     S = (_lerp1_nb(a_tab, math.degrees(math.acos(min(1.0, jz))), astep) / jz
                                          + _lerp1_nb(a_tab, math.degrees(math.acos(min(1.0, qz))), astep) / qz)
-                                    rec_th[o, 3] = S * fzeta[k]
-                                    rec_li[o] = li
-                                cnt += 1
+                                    th3 = S * fzeta[k]
+                                if not area:
+                                    if fill:
+                                        o = base + cnt
+                                        rec_pix[o] = row * W + col
+                                        rec_w[o] = wgt
+                                        rec_th[o, 0] = th0
+                                        rec_th[o, 1] = th1
+                                        rec_th[o, 2] = th2
+                                        rec_th[o, 3] = th3
+                                        rec_li[o] = li
+                                    cnt += 1
+                                    continue
+                                # area splat: the flake's power wgt·Ω(flake) shared over the pixels
+                                # in proportion to their covered area (the whole ellipse, frame
+                                # included or not), each divided by its own solid angle Ω_p
+                                idet = 1.0 / det
+                                tot = 0.0
+                                first = base + cnt
+                                for rr in range(int(math.floor(rowf - ey)), int(math.floor(rowf + ey)) + 1):
+                                    for cc in range(int(math.floor(colf - ex)), int(math.floor(colf + ex)) + 1):
+                                        cov = _ellipse_coverage(cc - colf, rr - rowf, a1x, a1y, a2x, a2y, idet)
+                                        if cov <= 0.0:
+                                            continue
+                                        tot += cov
+                                        if cc < c0 or cc > c1 or rr < r0 or rr > r1:
+                                            continue
+                                        if fill:
+                                            o = base + cnt
+                                            up_ = (2 * (cc + 0.5) / W - 1 + sx) * tx
+                                            vp_ = (1 - 2 * (rr + 0.5) / H + sy) * ty
+                                            cp = 1.0 / math.sqrt(1 + up_ * up_ + vp_ * vp_)
+                                            rec_pix[o] = rr * W + cc
+                                            rec_w[o] = wgt * cov * omega / (pix_sa * cp * cp * cp)
+                                            rec_th[o, 0] = th0
+                                            rec_th[o, 1] = th1
+                                            rec_th[o, 2] = th2
+                                            rec_th[o, 3] = th3
+                                            rec_li[o] = li
+                                        cnt += 1
+                                if fill and tot > 0.0:
+                                    for o in range(first, base + cnt):
+                                        rec_w[o] /= tot
             counts[jj] = cnt
 
     @_nb.njit(parallel=True, cache=True, fastmath=True)
@@ -729,7 +844,7 @@ def _check_camera(plate: PaintedPlate, camera: PinholeCamera):
 
 def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environment=None, wavelength_nm=None,
                  glint_spread_deg: float = 1.0, coarse_step: int = 4, background=None,
-                 randomize_tiles: bool = True, tile_seed: int = 0) -> SpectralImage:
+                 randomize_tiles: bool = True, tile_seed: int = 0, area_splat: bool = True) -> SpectralImage:
     """Render the spectral radiance image of ``plate`` seen by ``camera``.
 
     Parameters
@@ -761,6 +876,17 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
         and the glints around a light's highlight print that histogram (a dark or bright
         centre or ring) instead of the smooth p(θh) of the statistical BRDF; False tiles
         the cell as is.
+    area_splat : bool
+        Spread the glint of a flake whose projected disc is wider than a pixel over the
+        pixels its footprint covers (default), instead of the pixel of its centre. The
+        footprint is the affine image of the flake disc (diameter, normal) at its centre —
+        the pinhole projection to first order; the coat's refraction and the flake's depth
+        are neglected — an ellipse; each pixel of its bounding box gets the fraction of
+        the ellipse's area it covers (exactly 1 for pixels whose four corners are inside,
+        else an 8 × 8 sub-pixel count), normalised over the whole ellipse, divided by the
+        pixel's own solid angle: Σ_p L_p Ω_p equals the point splat's L Ω exactly (the
+        part of a footprint outside the frame is lost). Flakes whose projected diameter
+        is at most one pixel keep the point splat (identical results).
 
     Returns
     -------
@@ -860,7 +986,7 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     n_glints = 0
     if plate.flakes is not None and lights:
         n_glints = _render_glints(plate, camera, lights, spectra, w, np.radians(sig), P[on], img,
-                                  randomize_tiles, tile_seed)
+                                  randomize_tiles, tile_seed, area_splat)
 
     # white diffuser at the plate centre (exposure / adopted white)
     centre = np.zeros((1, 3))
@@ -950,7 +1076,8 @@ def _tilt_variants(fl, n_var: int) -> np.ndarray:
     return np.ascontiguousarray(out)
 
 
-def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomize_tiles=True, tile_seed=0):
+def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomize_tiles=True, tile_seed=0,
+                   area_splat=True):
     fl = plate.flakes
     tab = plate.smooth_brdf.prepare(w)
     n = float(tab.n)
@@ -968,6 +1095,7 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     fpos = np.ascontiguousarray(fl.positions_nm * 1e-6)
     fnrm = np.ascontiguousarray(fl.normals)
     farea = fl.areas_nm2 * 1e-12
+    fdiam = np.ascontiguousarray(np.asarray(fl.diameters_nm, float) * 1e-6)
     # attenuation by the flakes above each flake: exp(-τ_e S ζ) with ζ = τ_above / τ, the
     # same mean-field factor as nmmm.appearance.brdf.flake_list_reflection
     if hasattr(fl, "optical_depth_above") and fl.optical_depth > 0:
@@ -1005,8 +1133,8 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     offsets = np.zeros(nrow, np.int64)
     e0 = np.zeros(0, np.int64)
     args = (cam, r, u, f, tx, ty, sx, sy, Wd, Hd, hx, hy, cw, ch, i0, i1, j0, j1,
-            fpos, fnrm, farea, fzeta, G, gstart, order, lkind, lvec, lscale, n, sigma, cut, a_tab, tab.step,
-            bool(randomize_tiles), int(tile_seed))
+            fpos, fnrm, farea, fdiam, fzeta, G, gstart, order, lkind, lvec, lscale, n, sigma, cut, a_tab, tab.step,
+            bool(randomize_tiles), int(tile_seed), bool(area_splat))
     _glint_tiles(False, offsets, e0, np.zeros(0), np.zeros((0, 4)), e0, counts, *args)
     total = int(counts.sum())
     if total == 0:
