@@ -127,7 +127,8 @@ def hematite_demo(output_dir, progress: bool = True) -> dict:
             for solver in ("km", "ad"):
                 if sub_name == "black" and solver == "km" and kind == "grain":
                     continue
-                entry[(sub_name, solver)] = paint_reflectance(film, w, solver=solver, specular=SPECULAR).reflectance
+                entry[(sub_name, solver)] = paint_reflectance(film, w, solver=solver, specular=SPECULAR,
+                                                              phase_function="hg").reflectance
             if sub_name == "white":  # AD with the full (δ-M truncated) Mie phase function instead of HG
                 entry[("white", "ad_mie")] = paint_reflectance(film, w, solver="ad", specular=SPECULAR, phase_function="mie").reflectance
         co = film_coefficients(film, w)
