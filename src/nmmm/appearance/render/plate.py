@@ -887,6 +887,7 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
         pixel's own solid angle: Σ_p L_p Ω_p equals the point splat's L Ω exactly (the
         part of a footprint outside the frame is lost). Flakes whose projected diameter
         is at most one pixel keep the point splat (identical results).
+        ``metadata['n_glints']`` counts the glint records (one per lit pixel of a flake).
 
     Returns
     -------
