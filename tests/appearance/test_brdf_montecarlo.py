@@ -304,10 +304,6 @@ def test_single_scattering_terms_match_mc(traces, tau):
         assert np.allclose(paint.specular_reflectance(WAVELENGTHS, _wi(th)), r["specular"], atol=1e-3)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "PaintBRDF's multiple-scattering term overestimates absorbing paints: total albedo model − MC "
-    "= +0.016…+0.020 (τ = 1) and +0.10…+0.12 (τ = 2) at 0–75°, i.e. the multiple term is 1.25× (τ = 1) "
-    "and 2.05× (τ = 2) the traced one; see brdf.py Notes"))
 @pytest.mark.parametrize("tau", [1.0, 2.0])
 def test_total_albedo_matches_mc(traces, tau):
     paint = _paint(tau)
