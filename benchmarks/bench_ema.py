@@ -57,7 +57,7 @@ def main():
         diff = np.max(np.abs(out[ok] - ref[ok]) / np.maximum(np.abs(ref[ok]), 1e-300))
         print(f"{name:18s} {t_ours:10.4f} {t_ref:11.3f} {t_ref / t_ours:8.0f}x {diff:14.2e}")
 
-    from nmmm.ema.bruggeman import _bruggeman_general, _groups, _phases
+    from nmmm.ema.bruggeman_rule import _bruggeman_general, _groups, _phases
 
     e2, f2 = _phases([ea[:, None], es[:, None]], [fractions[None, :], 1 - fractions[None, :]])
     t_gen, out_gen = best_of(lambda: _bruggeman_general(e2, f2, *_groups(2, None)))

@@ -1,4 +1,4 @@
-"""Benchmark: nmmm.layers.mie against miepython's Numba path (the library a user would pick).
+"""Benchmark: nmmm.layers.mie_scattering against miepython's Numba path (the library a user would pick).
 
 Case (issue 4): 401 wavelengths (380–780 nm) × 200 diameters (20 nm – 2 µm, log-spaced) of a
 hematite-like absorbing sphere (dispersive n + ik) in a resin of index 1.55. Both libraries are
@@ -22,7 +22,7 @@ import numpy as np  # noqa: E402
 def main(repeat: int = 3) -> dict:
     import miepython
 
-    from nmmm.layers.mie import mie
+    from nmmm.layers.mie_scattering import mie
 
     assert miepython.USE_JIT, "miepython's numba path is not active"
     w = np.linspace(380.0, 780.0, 401)
@@ -61,7 +61,7 @@ def main(repeat: int = 3) -> dict:
         "max_rel_diff": {k: float(v) for k, v in zip(("qext", "qsca", "qback", "g"), rel.reshape(4, -1).max(axis=1))},
     }
     print(f"Mie, {len(w)} wavelengths x {len(d)} diameters = {W.size} spheres")
-    print(f"  nmmm.layers.mie   : {t_nmmm * 1e3:8.1f} ms")
+    print(f"  nmmm.layers.mie_scattering   : {t_nmmm * 1e3:8.1f} ms")
     print(f"  miepython (numba) : {t_mp * 1e3:8.1f} ms")
     print(f"  speed-up          : {out['speedup']:.1f}x  (target >= 2x)")
     print("  max relative difference vs miepython: " + ", ".join(f"{k} {v:.1e}" for k, v in out["max_rel_diff"].items()))

@@ -1,6 +1,6 @@
 """Multi-level effective media: particles in binder -> aggregates -> in binder -> a layer.
 
-Each level's result is a Material (``nmmm.ema.mix``), used as a compound of the next.
+Each level's result is a Material (``nmmm.ema.mixtures``), used as a compound of the next.
 
     python examples/ema_multilevel.py
 """

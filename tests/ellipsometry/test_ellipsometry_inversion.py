@@ -6,7 +6,7 @@ import pytest
 from nmmm.ellipsometry.anisotropy import synthetic_uniaxial_data, uniaxial_from_two_orientations
 from nmmm.ellipsometry.data import EllipsometryData
 from nmmm.ellipsometry.model import EllipsometryModel
-from nmmm.ellipsometry.point_by_point import kk_check, point_by_point
+from nmmm.ellipsometry.point_by_point_inversion import kk_check, point_by_point
 from nmmm.errors import ConvergenceError, InvalidInputError
 
 elli = pytest.importorskip("elli")
@@ -130,7 +130,7 @@ def test_point_by_point_under_roughness(silicon, elli_table):
     """A rough bulk sample (Si under 3 nm of Bruggeman 50 % void, pyElli's BruggemanEMA): the
     point-by-point inversion with the roughness layer in the model returns Si's n + ik, whereas
     the pseudo-dielectric function (no roughness) does not."""
-    from nmmm.ellipsometry.pseudo_dielectric import pseudo_dielectric
+    from nmmm.ellipsometry.pseudo_dielectric_function import pseudo_dielectric
 
     si = elli_table(silicon, W)
     s = elli.Structure(elli.AIR, [elli.Layer(elli.BruggemanEMA(si, elli.AIR, 0.5), 3.0)], si)

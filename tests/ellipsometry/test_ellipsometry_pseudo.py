@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from nmmm.ellipsometry.data import EllipsometryData
-from nmmm.ellipsometry.pseudo_dielectric import pseudo_dielectric, pseudo_dielectric_material
+from nmmm.ellipsometry.pseudo_dielectric_function import pseudo_dielectric, pseudo_dielectric_material
 from nmmm.errors import InvalidInputError
 
 elli = pytest.importorskip("elli")

@@ -195,7 +195,7 @@ def test_ellipsoidal_grains_one_upper_root_and_dilute_limit():
 
 def _general(ea, eb, p):
     """The n-phase Aberth/Newton root finder, bypassing the two-sphere closed form."""
-    from nmmm.ema.bruggeman import _bruggeman_general, _groups, _phases
+    from nmmm.ema.bruggeman_rule import _bruggeman_general, _groups, _phases
 
     e, f = _phases([ea, eb], [p, 1 - np.asarray(p, float)])
     return _bruggeman_general(e, f, *_groups(2, None))
@@ -205,7 +205,7 @@ def test_two_sphere_fast_path_agrees_with_the_general_solver():
     """Two different algorithms (closed-form quadratic vs. Aberth–Ehrlich + Newton on the
     regularised polynomial) with the same limiting-absorption rule: random lossy phases,
     metals (ε = −50 + 1i, −10 + 0.3i, lossless −5), lossless dielectrics, p over all of [0, 1]."""
-    from nmmm.ema.bruggeman import _bruggeman_two_spheres
+    from nmmm.ema.bruggeman_rule import _bruggeman_two_spheres
 
     rng = np.random.default_rng(16)
     n = 4000
@@ -232,7 +232,7 @@ def test_two_sphere_fast_path_where_the_principal_root_is_wrong():
     """ε₁ = −50 + 1i in ε₂ = 2.25 at p = 0.2: the principal-sqrt formula
     (b + sqrt(b² + 8ε₁ε₂))/4 gives a gain root (Im < 0); the fast path returns the other,
     passive root, which is also the general solver's."""
-    from nmmm.ema.bruggeman import _bruggeman_two_spheres
+    from nmmm.ema.bruggeman_rule import _bruggeman_two_spheres
 
     e1, e2 = np.full(3, -50 + 1j), np.full(3, 2.25 + 0j)
     p = np.array([0.1, 0.2, 0.5])

@@ -10,7 +10,7 @@ import pytest
 from scipy.special import expn
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.adding_doubling import adding_doubling, radau_quadrature
+from nmmm.layers.adding_doubling_method import adding_doubling, radau_quadrature
 
 iad = pytest.importorskip("iadpython")
 

@@ -13,7 +13,7 @@ from scipy.integrate import quad
 from scipy.special import eval_legendre
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.adding_doubling import adding_doubling, hg_legendre_moments
+from nmmm.layers.adding_doubling_method import adding_doubling, hg_legendre_moments
 from nmmm.layers.distributions import lognormal, monodisperse
 from nmmm.layers.paint import PaintFilm, mie_phase_moments, paint_reflectance
 

@@ -17,7 +17,7 @@ os.environ.setdefault("MIEPYTHON_USE_JIT", "0")
 miepython = pytest.importorskip("miepython")
 
 from nmmm.errors import InvalidInputError  # noqa: E402
-from nmmm.layers.mie import mie, mie_coated, mie_multilayer  # noqa: E402
+from nmmm.layers.mie_scattering import mie, mie_coated, mie_multilayer  # noqa: E402
 
 M_VALUES = [1.5 + 0.01j, 1.33 + 1e-8j, 2.9 + 0.3j, 1.05 + 0j, 0.2 + 3.0j, 10 + 10j]
 X_VALUES = [0.3, 1.0, 3.0, 10.0, 30.0, 120.0]

@@ -144,14 +144,14 @@ def refract_out(v: np.ndarray, n: float) -> tuple[np.ndarray, np.ndarray]:
 
 def fresnel_unpolarized(cos_i, n1, n2):
     """Unpolarised reflectance (R_s + R_p)/2 at a plane interface (Born & Wolf §1.5.2),
-    from :func:`nmmm.layers.fresnel`; ``cos_i`` the cosine of the angle of incidence in
+    from :func:`nmmm.layers.fresnel_equations`; ``cos_i`` the cosine of the angle of incidence in
     medium 1. ``n2`` may be complex (k >= 0) or smaller than ``n1`` (total internal
     reflection, R = 1). Broadcasts over all arguments.
 
     >>> round(float(fresnel_unpolarized(1.0, 1.0, 1.5)), 6)  # ((1.5-1)/(1.5+1))**2
     0.04
     """
-    from nmmm.layers.fresnel import fresnel
+    from nmmm.layers.fresnel_equations import fresnel
 
     angle = np.degrees(np.arccos(np.clip(np.asarray(cos_i, dtype=float), 0.0, 1.0)))
     return np.asarray(fresnel(n1, n2, np.minimum(angle, _MAX_ANGLE_DEG)).R, dtype=float)

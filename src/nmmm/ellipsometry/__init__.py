@@ -27,14 +27,15 @@ import importlib
 _EXPORTS = {
     "psi_delta": "forward", "rho": "forward", "psi_delta_from_rho": "forward",
     "rho_from_psi_delta": "forward", "bulk_rho": "forward", "uniaxial_bulk_rho": "forward",
-    "pseudo_dielectric": "pseudo_dielectric", "pseudo_dielectric_material": "pseudo_dielectric",
+    "pseudo_dielectric": "pseudo_dielectric_function", "pseudo_dielectric_material": "pseudo_dielectric_function",
     "EllipsometryData": "data", "read_data": "data", "read_csv": "data", "read_woollam": "data",
     "write_csv": "data", "write_material_csv": "data",
     "Parameter": "fitting", "FitResult": "fitting", "fit_psi_delta": "fitting",
     "FitAtBoundWarning": "fitting", "fit_joint": "joint", "joint_parameter_names": "joint",
     "EllipsometryModel": "model", "read_model": "model", "dispersion_material": "model",
     "roughness_material": "model",
-    "point_by_point": "point_by_point", "PointByPointResult": "point_by_point", "kk_check": "point_by_point",
+    "point_by_point": "point_by_point_inversion", "PointByPointResult": "point_by_point_inversion",
+    "kk_check": "point_by_point_inversion",
     "uniaxial_from_two_orientations": "anisotropy", "UniaxialResult": "anisotropy",
 }
 

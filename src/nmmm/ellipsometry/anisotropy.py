@@ -19,7 +19,7 @@ ch. 4). Each orientation's pseudo-dielectric function is, to first order, the pe
 the in-plane direction of the plane of incidence (Aspnes 1980): ⟨ε⟩_∥ ≈ ε_e, ⟨ε⟩_⊥ ≈ ε_o. These
 start a Levenberg–Marquardt solution of the exact equations for the four unknowns
 (n_o, k_o, n_e, k_e) at every wavelength, vectorised across wavelengths
-(:func:`nmmm.ellipsometry.point_by_point.batched_levenberg_marquardt`), with all angles of both
+(:func:`nmmm.ellipsometry.point_by_point_inversion.batched_levenberg_marquardt`), with all angles of both
 measurements used together.
 
 References
@@ -38,9 +38,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nmmm.ellipsometry.forward import psi_delta_from_rho, uniaxial_bulk_rho, wrap_delta
-from nmmm.ellipsometry.point_by_point import (_raise_unconverged, _uncertainties, batched_levenberg_marquardt,
+from nmmm.ellipsometry.point_by_point_inversion import (_raise_unconverged, _uncertainties, batched_levenberg_marquardt,
                                                group_wavelengths)
-from nmmm.ellipsometry.pseudo_dielectric import pseudo_dielectric
+from nmmm.ellipsometry.pseudo_dielectric_function import pseudo_dielectric
 from nmmm.errors import InvalidInputError
 from nmmm.materials.material import eps_to_nk
 

@@ -116,7 +116,7 @@ def fit_cmd(data_files, model_files, shared, fmt, output_dir, save_material, pbp
                                   reference=f"ellipsometry {'joint ' if joint else ''}fit of {what}, MSE {result.mse:.3g}")
         click.echo(f"material: {path}")
     if pbp_layer:
-        from nmmm.ellipsometry.point_by_point import kk_check, point_by_point
+        from nmmm.ellipsometry.point_by_point_inversion import kk_check, point_by_point
 
         pbp = point_by_point(result.extra["data"], fitted, pbp_layer)
         path = pbp.write_csv(out / f"{pbp_layer}_point_by_point.csv")
@@ -132,7 +132,7 @@ def fit_cmd(data_files, model_files, shared, fmt, output_dir, save_material, pbp
 def pseudo_cmd(data_file, angle, fmt, output):
     """Pseudo-dielectric function <eps> of a bulk sample, written as a Material CSV (n, k)."""
     from nmmm.ellipsometry.data import read_data, write_material_csv
-    from nmmm.ellipsometry.pseudo_dielectric import pseudo_dielectric_material
+    from nmmm.ellipsometry.pseudo_dielectric_function import pseudo_dielectric_material
 
     data = read_data(data_file, format=fmt)
     mat = pseudo_dielectric_material(data, angle, name=f"<eps> of {Path(data_file).stem}")

@@ -50,7 +50,7 @@ def epoxy_on_silicon(output_dir=None, seed: int = 7, sigma_psi_deg: float = 0.02
     """Synthetic measurement of an epoxy film on Si, fitted. Returns a dict of results."""
     from nmmm.ellipsometry.data import EllipsometryData, write_csv, write_material_csv
     from nmmm.ellipsometry.model import EllipsometryModel
-    from nmmm.ellipsometry.point_by_point import kk_check, point_by_point
+    from nmmm.ellipsometry.point_by_point_inversion import kk_check, point_by_point
     import tomllib
 
     model = EllipsometryModel.from_dict(tomllib.loads(EPOXY_MODEL_TOML))

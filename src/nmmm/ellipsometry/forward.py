@@ -47,7 +47,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.fresnel import check_angle_deg  # the one check of angles of incidence
+from nmmm.layers.fresnel_equations import check_angle_deg  # the one check of angles of incidence
 from nmmm.spectra import as_wavelength_nm, check_finite
 
 __all__ = [

@@ -130,7 +130,7 @@ def roughness_material(below, void=1.0, fraction_void: float = 0.5, name: str = 
     """Surface roughness as an effective medium: Bruggeman mixture of the material below and
     void (50/50 by default), the standard overlayer of ellipsometry (Fujiwara 2007, ch. 5;
     Aspnes, Theeten & Hottier 1979). Computed with :mod:`nmmm.ema`."""
-    from nmmm.ema.bruggeman import bruggeman
+    from nmmm.ema.bruggeman_rule import bruggeman
     from nmmm.materials.material import DerivedMaterial, as_material
     from nmmm.spectra import check_fraction
 

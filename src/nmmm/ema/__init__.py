@@ -27,16 +27,16 @@ Ruppin (2000), Sihvola (1999), Bohren & Huffman (1983).
 """
 
 from nmmm.ema.bounds import BoundingRegion, bergman_milton_bounds, hashin_shtrikman_bounds, wiener_bounds
-from nmmm.ema.bruggeman import bruggeman, bruggeman_residual
-from nmmm.ema.looyenga import looyenga
-from nmmm.ema.maxwell_garnett import (
+from nmmm.ema.bruggeman_rule import bruggeman, bruggeman_residual
+from nmmm.ema.looyenga_rule import looyenga
+from nmmm.ema.maxwell_garnett_rule import (
     maxwell_garnett,
     maxwell_garnett_ellipsoid,
     maxwell_garnett_multi,
     maxwell_garnett_polarizability,
     maxwell_garnett_shape,
 )
-from nmmm.ema.mix import Inclusion, mix, mix_tensor
+from nmmm.ema.mixtures import Inclusion, mix, mix_tensor
 from nmmm.ema.registry import EFFECTIVE_PERMITTIVITY_METHODS, effective_permittivity
 from nmmm.ema.shapes import (
     CUBE_DEPOLARIZATION,

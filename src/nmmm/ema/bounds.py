@@ -103,7 +103,7 @@ def hashin_shtrikman_bounds(eps_phases, fractions):
         if e.shape[-1] != 2:
             raise InvalidInputError("complex Hashin–Shtrikman bounds are given for two phases; "
                                     "use bergman_milton_bounds") from None
-        from nmmm.ema.maxwell_garnett import maxwell_garnett
+        from nmmm.ema.maxwell_garnett_rule import maxwell_garnett
 
         return (maxwell_garnett(e[..., 0], e[..., 1], f[..., 0]),
                 maxwell_garnett(e[..., 1], e[..., 0], f[..., 1]))

@@ -28,7 +28,7 @@ def _parse_shape(text):
 
 
 def _parse_inclusion(spec):
-    from nmmm.ema.mix import Inclusion
+    from nmmm.ema.mixtures import Inclusion
     from nmmm.materials import get
 
     parts = spec.split(":")
@@ -65,7 +65,7 @@ def methods():
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="CSV file (default: stdout)")
 def mix_cmd(host, inclusions, method, start_nm, stop_nm, step_nm, output):
     """n and k of an effective medium on a wavelength grid."""
-    from nmmm.ema.mix import mix
+    from nmmm.ema.mixtures import mix
     from nmmm.materials import get
     from nmmm.spectra import wavelength_grid
 

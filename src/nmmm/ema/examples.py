@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nmmm.ema.mix import Inclusion, mix
+from nmmm.ema.mixtures import Inclusion, mix
 from nmmm.ema.shapes import Shape
 from nmmm.spectra import as_wavelength_nm, check_nk, check_positive
 
@@ -253,8 +253,8 @@ def gold_ruby_demo(output_dir) -> dict:
 
     # -- bounds in the complex plane (Bergman–Milton) at the plasmon wavelength -----------------
     from nmmm.ema.bounds import bergman_milton_bounds
-    from nmmm.ema.bruggeman import bruggeman
-    from nmmm.ema.maxwell_garnett import maxwell_garnett
+    from nmmm.ema.bruggeman_rule import bruggeman
+    from nmmm.ema.maxwell_garnett_rule import maxwell_garnett
 
     ea, es = gold.eps(peak_nm), silica.eps(peak_nm)
     fig, ax = plt.subplots(figsize=(6.4, 4.8))

@@ -9,8 +9,8 @@ Method names are case-insensitive; spaces and hyphens count as underscores; a fe
 usual aliases are accepted ("MG", "EMA", "LLL", ...). Adding a method is adding a
 function and a registry line (the colour-science pattern).
 
-References: see each method's module (:mod:`~nmmm.ema.maxwell_garnett`,
-:mod:`~nmmm.ema.bruggeman`, :mod:`~nmmm.ema.looyenga`, :mod:`~nmmm.ema.size`,
+References: see each method's module (:mod:`~nmmm.ema.maxwell_garnett_rule`,
+:mod:`~nmmm.ema.bruggeman_rule`, :mod:`~nmmm.ema.looyenga_rule`, :mod:`~nmmm.ema.size`,
 :mod:`~nmmm.ema.bounds`).
 """
 
@@ -19,9 +19,9 @@ from __future__ import annotations
 import inspect
 
 from nmmm.ema.bounds import wiener_bounds
-from nmmm.ema.bruggeman import bruggeman
-from nmmm.ema.looyenga import looyenga
-from nmmm.ema.maxwell_garnett import maxwell_garnett, maxwell_garnett_ellipsoid, maxwell_garnett_shape
+from nmmm.ema.bruggeman_rule import bruggeman
+from nmmm.ema.looyenga_rule import looyenga
+from nmmm.ema.maxwell_garnett_rule import maxwell_garnett, maxwell_garnett_ellipsoid, maxwell_garnett_shape
 from nmmm.ema.size import maxwell_garnett_mie
 from nmmm.errors import InvalidInputError
 from nmmm.spectra import check_fraction

@@ -241,7 +241,7 @@ def maxwell_garnett_mie(eps_inclusion, eps_host, fraction, radius_nm, wavelength
     when x exceeds ``max_size_parameter`` or the neglected multipoles exceed ``max_neglected``
     of the extinction (:func:`check_dipole_validity`). All arguments broadcast.
     """
-    from nmmm.ema.maxwell_garnett import maxwell_garnett_polarizability
+    from nmmm.ema.maxwell_garnett_rule import maxwell_garnett_polarizability
 
     p = as_fraction(fraction)
     alpha = dipole_polarizability_mie(eps_inclusion, eps_host, radius_nm, wavelength_nm)

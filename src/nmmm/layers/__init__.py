@@ -3,9 +3,9 @@ pigmented film (Kubelka–Munk with Saunderson, adding–doubling), thin-film in
 
 Shared by two authors: each adds only the import lines of their own modules below.
 """
-from nmmm.layers.fresnel import brewster_angle, critical_angle, fresnel, n_cos_theta  # noqa: E402,F401  (thin films)
+from nmmm.layers.fresnel_equations import brewster_angle, critical_angle, fresnel, n_cos_theta  # noqa: E402,F401  (thin films)
 from nmmm.layers.thinfilm import Layer, Stack, StackResult  # noqa: E402,F401  (thin films)
-from nmmm.layers.mie import MieResult, mie, mie_coated, mie_multilayer  # noqa: E402,F401  (Mie)
+from nmmm.layers.mie_scattering import MieResult, mie, mie_coated, mie_multilayer  # noqa: E402,F401  (Mie)
 from nmmm.layers.distributions import (  # noqa: E402,F401  (Mie: sizes, shapes, structure factor)
     PigmentOptics,
     SizeDistribution,
@@ -26,5 +26,5 @@ from nmmm.layers.kubelka_munk import (  # noqa: E402,F401  (radiative transfer, 
     saunderson_k1,
     saunderson_k2,
 )
-from nmmm.layers.adding_doubling import ADResult, adding_doubling  # noqa: E402,F401  (radiative transfer, reference)
+from nmmm.layers.adding_doubling_method import ADResult, adding_doubling  # noqa: E402,F401  (radiative transfer, reference)
 from nmmm.layers.paint import PaintFilm, compare_km_ad, film_coefficients, paint_reflectance  # noqa: E402,F401  (paint film)

@@ -75,7 +75,7 @@ def layers():
 @_grid_options
 def mie_cmd(particle, medium, diameters, start_nm, stop_nm, step_nm, output):
     """Mie efficiencies of homogeneous spheres over a wavelength grid."""
-    from nmmm.layers.mie import mie
+    from nmmm.layers.mie_scattering import mie
     from nmmm.spectra import wavelength_grid
 
     w = wavelength_grid(start_nm, stop_nm, step_nm)

@@ -70,8 +70,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.fresnel import medium_nk
-from nmmm.layers.mie import mie
+from nmmm.layers.fresnel_equations import medium_nk
+from nmmm.layers.mie_scattering import mie
 from nmmm.spectra import as_wavelength_nm, check_finite, check_fraction, check_positive
 
 __all__ = [

@@ -222,7 +222,7 @@ def hematite_demo(output_dir, progress: bool = True) -> dict:
     plt.close(fig)
 
     # ---- figure 3: where KM departs from AD, opaque film, any pigment ----------------
-    from nmmm.layers.adding_doubling import adding_doubling
+    from nmmm.layers.adding_doubling_method import adding_doubling
     from nmmm.layers.kubelka_munk import km_r_infinity, saunderson, saunderson_k2
 
     one_minus_a = np.geomspace(1e-3, 0.5, 40)

@@ -20,7 +20,7 @@ All K, S, μ are per unit length in the same unit as the thickness (here nm⁻¹
 Assumptions (and where they break): KM treats two diffuse fluxes. It is good for optically
 thick, strongly scattering films with moderate absorption; it is off for collimated light
 in weakly scattering or strongly forward-scattering films and for thin layers.
-:mod:`nmmm.layers.adding_doubling` solves the radiative transfer equation with Fresnel
+:mod:`nmmm.layers.adding_doubling_method` solves the radiative transfer equation with Fresnel
 boundaries as the reference; :func:`nmmm.layers.paint.compare_km_ad` reports the difference.
 
 References
@@ -48,7 +48,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.fresnel import fresnel
+from nmmm.layers.fresnel_equations import fresnel
 from nmmm.spectra import check_finite
 
 __all__ = [
@@ -206,7 +206,7 @@ def km_transmittance(K, S, thickness):
 # --------------------------------------------------------------------------------------
 def saunderson_k1(n_binder, angle_deg=0.0, n_ambient=1.0):
     """External specular reflectance k1 of the air/binder surface for light incident at
-    ``angle_deg`` (unpolarized Fresnel, :func:`nmmm.layers.fresnel.fresnel`)."""
+    ``angle_deg`` (unpolarized Fresnel, :func:`nmmm.layers.fresnel_equations.fresnel`)."""
     return fresnel(n_ambient, n_binder, angle_deg).R
 
 

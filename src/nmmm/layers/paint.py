@@ -38,7 +38,7 @@ coat (collimated in: e^{−α d}; diffuse out: 2E₃(α d)) and Saunderson's cor
 
     R = k1 + (1 − k1)(1 − k2) t_c t_d R_b / (1 − k2 t_d² R_b)
 
-AD path: :func:`nmmm.layers.adding_doubling.adding_doubling` with albedo μ_s/(μ_a + μ_s),
+AD path: :func:`nmmm.layers.adding_doubling_method.adding_doubling` with albedo μ_s/(μ_a + μ_s),
 optical thickness (μ_a + μ_s) X, and either (``phase_function="mie"``, default: AD is the
 accurate reference) the actual Mie phase function or (``"hg"``, the cheaper approximation
 of most tools) the Henyey–Greenstein phase function with the Mie g. The actual phase function:
@@ -74,10 +74,10 @@ import numpy as np
 from scipy.special import expn
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.adding_doubling import adding_doubling
+from nmmm.layers.adding_doubling_method import adding_doubling
 from nmmm.layers.distributions import SizeDistribution, percus_yevick_structure_factor, pigment_optics
 from nmmm.layers.kubelka_munk import km_coefficients, km_reflectance, saunderson, saunderson_k1, saunderson_k2
-from nmmm.layers.fresnel import medium_nk
+from nmmm.layers.fresnel_equations import medium_nk
 from nmmm.spectra import as_wavelength_nm, check_finite, check_fraction
 
 __all__ = [
@@ -202,7 +202,7 @@ def mie_phase_moments(film: PaintFilm, wavelength_nm, n_moments: int = 17, n_ang
     -------
     ndarray, shape (W, n_moments); χ_0 = 1 and χ_1 = the C_sca-weighted g.
     """
-    from nmmm.layers.mie import mie
+    from nmmm.layers.mie_scattering import mie
 
     w = as_wavelength_nm(np.atleast_1d(wavelength_nm))
     L = int(n_moments)

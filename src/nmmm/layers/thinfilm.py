@@ -26,7 +26,7 @@ tilted admittance ``η = n cos θ`` (s) or ``n/cos θ`` (p) — written here for
 ``t``. The products are applied to the vector ``[B, C]`` from the substrate upwards, as
 batched complex arithmetic over every wavelength, angle and thickness at once.
 ``r = (η0 B − C)/(η0 B + C)``; ``rp`` is negated to follow the convention of
-:mod:`nmmm.layers.fresnel` (``rp = −rs`` at normal incidence, as in the ``tmm`` package
+:mod:`nmmm.layers.fresnel_equations` (``rp = −rs`` at normal incidence, as in the ``tmm`` package
 and Fujiwara 2007), and ``tp`` is converted from tangential to full field amplitudes.
 ``T = |t_tan|² Re(η_sub)/Re(η0)``, the transmitted Poynting flux into the substrate.
 
@@ -66,7 +66,7 @@ import numba
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.fresnel import UnpolarizedPower, check_angle_deg, medium_nk, n_cos_theta
+from nmmm.layers.fresnel_equations import UnpolarizedPower, check_angle_deg, medium_nk, n_cos_theta
 from nmmm.spectra import as_wavelength_nm, check_finite, check_nk, check_positive
 
 __all__ = ["Layer", "Stack", "StackResult", "coherent_rt", "NUMBA_MIN_POINTS"]
@@ -197,7 +197,7 @@ class StackResult(UnpolarizedPower):
     Rs, Rp, Ts, Tp : ndarray
         Power reflectance and transmittance (into the substrate), s and p.
     rs, rp, ts, tp : complex ndarray or None
-        Amplitude coefficients (conventions of :mod:`nmmm.layers.fresnel`; ``ts, tp``
+        Amplitude coefficients (conventions of :mod:`nmmm.layers.fresnel_equations`; ``ts, tp``
         full-field ratios substrate/incident); ``None`` when the stack has incoherent
         layers, for which no phase is defined.
     absorbed_s, absorbed_p : ndarray or None
@@ -426,7 +426,7 @@ def coherent_rt(n, q, d, k0, pol: str, flux: bool = False):
     n : list of complex ndarray
         ``[n_incidence, n_1, ..., n_L, n_exit]``, mutually broadcastable.
     q : list of complex ndarray
-        ``n cos θ`` in the same media (forward branch, :func:`~nmmm.layers.fresnel.n_cos_theta`).
+        ``n cos θ`` in the same media (forward branch, :func:`~nmmm.layers.fresnel_equations.n_cos_theta`).
     d : list of ndarray
         The ``L`` thicknesses in nm (same length unit as ``2π/k0``).
     k0 : ndarray
@@ -438,7 +438,7 @@ def coherent_rt(n, q, d, k0, pol: str, flux: bool = False):
     Returns
     -------
     r, t, R, T, absorbed
-        Complex amplitude coefficients in the :mod:`nmmm.layers.fresnel` convention,
+        Complex amplitude coefficients in the :mod:`nmmm.layers.fresnel_equations` convention,
         power R and T, and the per-layer absorption list (``None`` unless ``flux``).
     """
     L = len(d)

@@ -25,7 +25,7 @@ RVE (Kanit et al. 2003): :func:`fit_rve`, :class:`RVEFit`, :func:`rve_study`.
 Files: :func:`save_microstructure`, :func:`load_microstructure` (.tif / .npz).
 """
 
-from nmmm.microstructure.aggregates import aggregate_particles, aggregates
+from nmmm.microstructure.aggregation import aggregate_particles, aggregates
 from nmmm.microstructure.analysis import (
     ImageAnalysis,
     ParticleStatistics,

@@ -36,7 +36,7 @@ MODELS = {
     "boolean_discs": "nmmm.microstructure.boolean:boolean_discs",
     "hardcore_spheres": "nmmm.microstructure.hardcore:hardcore_spheres",
     "hardcore_pseudocubes": "nmmm.microstructure.hardcore:hardcore_pseudocubes",
-    "aggregates": "nmmm.microstructure.aggregates:aggregates",
+    "aggregates": "nmmm.microstructure.aggregation:aggregates",
     "flake_deposit": "nmmm.microstructure.flakes:flake_deposit",
 }
 

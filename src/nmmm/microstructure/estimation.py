@@ -4,7 +4,7 @@ Complements :func:`~nmmm.microstructure.analysis.estimate_boolean` and
 :func:`~nmmm.microstructure.analysis.estimate_hardcore` for the two other models of
 :mod:`nmmm.microstructure`.
 
-Aggregates (:func:`~nmmm.microstructure.aggregates.aggregates`, a Neyman–Scott process)
+Aggregates (:func:`~nmmm.microstructure.aggregation.aggregates`, a Neyman–Scott process)
     Particle centres are found by the Euclidean distance transform of the binary image and
     a marker-based watershed (touching particles of an aggregate are split at their
     necks); the particle radius is the equivalent-disc radius of the particles that were

@@ -9,7 +9,7 @@
   illuminant, …) used by sweeps and comparisons.
 
 Each physical step calls the public API of its package: :mod:`nmmm.materials` for the
-compounds, :func:`nmmm.ema.mix` or :func:`nmmm.homogenize.homogenize` for each level,
+compounds, :func:`nmmm.ema.mixtures` or :func:`nmmm.homogenize.homogenize` for each level,
 :mod:`nmmm.layers.paint` (Mie + Kubelka–Munk / adding–doubling) for a paint film,
 :class:`nmmm.layers.Stack` for thin films, :func:`nmmm.ema.examples.plate_transmittance` for
 a plate, :class:`nmmm.appearance.brdf.PaintBRDF` for flake paints, and
@@ -114,7 +114,7 @@ def build_materials(recipe: Recipe, wavelength_nm=None, progress: bool | None = 
     """Compounds and level results as :class:`~nmmm.materials.Material` objects, in
     recipe order; a database key, file or model error is a :class:`RecipeError` naming the
     compound's key. ``progress``: the FFT levels' progress bar (None: shown for long solves)."""
-    from nmmm.ema.mix import Inclusion, mix
+    from nmmm.ema.mixtures import Inclusion, mix
 
     w = _grid(recipe) if wavelength_nm is None else wavelength_nm
     mats = {}

@@ -204,7 +204,7 @@ class Level(_Strict):
             if self.inclusions[0].radius_nm is None:
                 raise ValueError("method 'fft' needs the inclusions' radius_nm (the particles of the cell)")
         else:
-            from nmmm.ema.mix import MIX_METHODS
+            from nmmm.ema.mixtures import MIX_METHODS
             from nmmm.ema.registry import canonical_method
 
             try:

@@ -31,9 +31,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nmmm.ema.bruggeman import bruggeman
-from nmmm.ema.looyenga import looyenga
-from nmmm.ema.maxwell_garnett import maxwell_garnett_multi, maxwell_garnett_polarizability
+from nmmm.ema.bruggeman_rule import bruggeman
+from nmmm.ema.looyenga_rule import looyenga
+from nmmm.ema.maxwell_garnett_rule import maxwell_garnett_multi, maxwell_garnett_polarizability
 from nmmm.ema.registry import canonical_method
 from nmmm.ema.shapes import Shape
 from nmmm.ema.size import (
@@ -176,7 +176,7 @@ def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = No
         name=name or desc,
         eps_function=_eps_function(host, incs, method, "random"),
         components=(host, *[inc.material for inc in incs]),
-        reference=f"nmmm.ema.mix — {desc}",
+        reference=f"nmmm.ema.mixtures — {desc}",
         metadata={"method": method, "host": host.name,
                   "inclusions": [{"material": inc.material.name, "fraction": inc.fraction,
                                   "shape": inc.shape.name, "radius_nm": inc.radius_nm} for inc in incs]},

@@ -196,7 +196,7 @@ class PointByPointResult:
 
         return TabulatedMaterial(name or f"{self.layer} (point-by-point)", self.wavelength_nm, self.nk.real,
                                  np.maximum(self.nk.imag, 0.0),
-                                 reference="nmmm.ellipsometry.point_by_point inversion")
+                                 reference="nmmm.ellipsometry.point_by_point_inversion inversion")
 
     def write_csv(self, path, name: str | None = None) -> Path:
         """Write a Material CSV (``wavelength_nm,n,k,sigma_n,sigma_k``) for ``nmmm.materials.read_csv``."""
@@ -204,7 +204,7 @@ class PointByPointResult:
 
         return write_material_csv(path, self.wavelength_nm, self.nk.real + 1j * np.maximum(self.nk.imag, 0),
                                   name=name or f"{self.layer} (point-by-point)",
-                                  reference="nmmm.ellipsometry.point_by_point inversion",
+                                  reference="nmmm.ellipsometry.point_by_point_inversion inversion",
                                   sigma_n=self.sigma_n, sigma_k=self.sigma_k)
 
 
@@ -289,7 +289,7 @@ def point_by_point(data, model, layer: str, values: dict | None = None, start=No
         if name == layer:
             return nk
         if name in rough_on_target:
-            from nmmm.ema.bruggeman import bruggeman
+            from nmmm.ema.bruggeman_rule import bruggeman
             from nmmm.materials.material import eps_to_nk
 
             return eps_to_nk(bruggeman(eps_void, nk * nk, rough_on_target[name]))

@@ -57,7 +57,7 @@ import numpy as np
 from numpy.polynomial import legendre as npleg
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.fresnel import fresnel
+from nmmm.layers.fresnel_equations import fresnel
 from nmmm.spectra import check_finite
 
 __all__ = ["ADResult", "adding_doubling", "gauss_quadrature", "hg_legendre_moments", "radau_quadrature"]

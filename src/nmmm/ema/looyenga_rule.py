@@ -27,7 +27,7 @@ from nmmm.errors import InvalidInputError
 def looyenga(eps_phases, fractions, fraction=None) -> np.ndarray:
     """Looyenga effective permittivity: ``eps = (Σ_i f_i eps_i^(1/3))³``.
 
-    Call forms as :func:`nmmm.ema.bruggeman`: ``looyenga([eps_1, ...], [f_1, ...])`` or
+    Call forms as :func:`nmmm.ema.bruggeman_rule`: ``looyenga([eps_1, ...], [f_1, ...])`` or
     ``looyenga(eps_inclusion, eps_host, fraction)``.
 
     >>> round(float(looyenga(1.0, 8.0, 0.5).real), 6)   # ((1 + 2)/2)³

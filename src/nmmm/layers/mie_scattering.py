@@ -49,7 +49,7 @@ import numba
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.fresnel import medium_nk
+from nmmm.layers.fresnel_equations import medium_nk
 from nmmm.spectra import as_wavelength_nm, check_finite, check_positive
 
 __all__ = ["MieResult", "mie", "mie_coated", "mie_multilayer"]
