@@ -9,6 +9,9 @@ array (nm) and broadcasts; outside :attr:`Material.range_nm` it raises
 - :class:`TabulatedMaterial` — n and k at nodes, interpolated linearly in wavelength.
 - :class:`DerivedMaterial` — ε given by a function of wavelength (effective media,
   mixtures), its range the intersection of its components' ranges.
+- :class:`Constant` — a non-dispersive n + ik (or ε); :func:`as_material` turns a number into
+  one. (Also listed with the dispersion models in :mod:`nmmm.materials.models`, which
+  re-exports it; it lives here so that this module imports nothing above it.)
 - :func:`nk_to_eps`, :func:`eps_to_nk` — eq. (1) of the seed paper.
 """
 
@@ -190,14 +193,61 @@ class DerivedMaterial(Material):
         return self.eps_function(w_nm)
 
 
+@dataclass(frozen=True, repr=False, kw_only=True)
+class Constant(Material):
+    """A non-dispersive material: give ``nk`` (n + ik, k ≥ 0) or ``eps`` (Im ε ≥ 0).
+
+    ``range_nm`` (default: all positive wavelengths) may be set to the range the value is
+    known to hold on, to be warned outside it.
+    """
+
+    name: str = "constant"
+    reference: str = "constant index (no dispersion)"
+    range_nm: tuple[float, float] = (0.0, np.inf)
+    nk_value: complex | None = None
+    eps_value: complex | None = None
+
+    def __init__(self, nk=None, eps=None, *, name="constant", reference="constant index (no dispersion)",
+                 range_nm=(0.0, np.inf)):
+        if (nk is None) == (eps is None):
+            raise InvalidInputError("Constant needs exactly one of nk= or eps=")
+        if eps is not None:
+            _check_finite_constant(eps)
+            eps = complex(eps)
+            if eps.imag < 0:
+                raise InvalidInputError(f"{name}: Im eps = {eps.imag} < 0; absorbing media have Im eps >= 0")
+            nk = complex(eps_to_nk(eps))
+        _check_finite_constant(nk)
+        nk = complex(nk)
+        if nk.imag < 0:
+            raise InvalidInputError(f"{name}: k = {nk.imag} < 0; nmmm uses n + ik with k >= 0")
+        if not (nk.real > 0 or nk.imag > 0):
+            raise InvalidInputError(f"{name}: n + ik = {nk} is not a physical index")
+        object.__setattr__(self, "nk_value", nk)
+        object.__setattr__(self, "eps_value", nk * nk)
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "reference", reference)
+        object.__setattr__(self, "range_nm", tuple(range_nm))
+        lo, hi = self.range_nm
+        if not 0 <= lo < hi:
+            raise InvalidInputError(
+                f"{name}: range_nm must be (lo, hi) with 0 <= lo < hi, got {self.range_nm}")
+
+    def _nk(self, w_nm):
+        return np.full(np.shape(w_nm), self.nk_value, dtype=complex)
+
+
+def _check_finite_constant(value):
+    if not np.all(np.isfinite(np.asarray(value, dtype=complex))):
+        raise InvalidInputError(f"parameters must be finite, got {(value,)}")
+
+
 def as_material(value, name: str | None = None) -> Material:
     """Return ``value`` if it is a :class:`Material`; a constant complex n + ik becomes a
-    non-dispersive material (for quick studies and tests)."""
+    non-dispersive :class:`Constant` material (for quick studies and tests)."""
     if isinstance(value, Material):
         return value
     nk = complex(check_finite(value, "refractive index"))
     if nk.imag < 0:
         raise InvalidInputError(f"refractive index {nk} has k < 0; nmmm uses n + ik with k >= 0")
-    from nmmm.materials.models import Constant
-
     return Constant(nk=nk, name=name or f"n={nk:g}")

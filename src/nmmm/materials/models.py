@@ -1,6 +1,7 @@
 """Dispersion models as :class:`~nmmm.materials.material.Material` objects.
 
-- :class:`Constant` — non-dispersive n + ik (or ε).
+- :class:`Constant` — non-dispersive n + ik (or ε); defined in :mod:`nmmm.materials.material`
+  (which turns numbers into it) and re-exported here.
 - :class:`Cauchy` — n = A + B/λ² + C/λ⁴ (λ in µm), optional Urbach absorption tail.
 - :class:`Sellmeier` — n² = A + Σ Bᵢ λ²/(λ² − Cᵢ) (λ, √Cᵢ in µm).
 - :class:`Drude` — free carriers, ε = ε∞ − ωp²/(E² + iΓE).
@@ -30,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nmmm.errors import InvalidInputError
-from nmmm.materials.material import HC_EV_NM, Material, eps_to_nk
+from nmmm.materials.material import HC_EV_NM, Constant, Material
 
 
 def _require(cond: bool, message: str):
@@ -52,39 +53,6 @@ class _Model(Material):
     def __post_init__(self):
         lo, hi = self.range_nm
         _require(0 <= lo < hi, f"{self.name}: range_nm must be (lo, hi) with 0 <= lo < hi, got {self.range_nm}")
-
-
-@dataclass(frozen=True, repr=False, kw_only=True)
-class Constant(_Model):
-    """A non-dispersive material: give ``nk`` (n + ik, k ≥ 0) or ``eps`` (Im ε ≥ 0)."""
-
-    nk_value: complex | None = None
-    eps_value: complex | None = None
-    name: str = "constant"
-    reference: str = "constant index (no dispersion)"
-
-    def __init__(self, nk=None, eps=None, *, name="constant", reference="constant index (no dispersion)",
-                 range_nm=(0.0, np.inf)):
-        if (nk is None) == (eps is None):
-            raise InvalidInputError("Constant needs exactly one of nk= or eps=")
-        if eps is not None:
-            _finite(eps)
-            eps = complex(eps)
-            _require(eps.imag >= 0, f"{name}: Im eps = {eps.imag} < 0; absorbing media have Im eps >= 0")
-            nk = complex(eps_to_nk(eps))
-        _finite(nk)
-        nk = complex(nk)
-        _require(nk.imag >= 0, f"{name}: k = {nk.imag} < 0; nmmm uses n + ik with k >= 0")
-        _require(nk.real > 0 or nk.imag > 0, f"{name}: n + ik = {nk} is not a physical index")
-        object.__setattr__(self, "nk_value", nk)
-        object.__setattr__(self, "eps_value", nk * nk)
-        object.__setattr__(self, "name", name)
-        object.__setattr__(self, "reference", reference)
-        object.__setattr__(self, "range_nm", tuple(range_nm))
-        _Model.__post_init__(self)
-
-    def _nk(self, w_nm):
-        return np.full(np.shape(w_nm), self.nk_value, dtype=complex)
 
 
 @dataclass(frozen=True, repr=False, kw_only=True)
