@@ -17,7 +17,8 @@ covariance, integral range and granulometry also accept 3-D arrays.
 - :func:`granulometry` — area fraction remaining after openings by discs of growing
   radius (Matheron 1975), by exact Euclidean distance transforms; its derivative is the
   granulometric size distribution.
-- :func:`label_particles` — connected components (periodic wrap optional).
+- :func:`label_particles` — connected components (periodic wrap optional); defined in
+  :mod:`nmmm.microstructure.labelling` (shared with the model estimators) and re-exported here.
 - :func:`particle_statistics` — centroids, areas, equivalent diameters in nm.
 - :func:`nearest_neighbour_distances` — centre-to-centre nearest-neighbour distances.
 - :func:`exclusion_radius` — half the hard-core distance (minimum centre distance).
@@ -45,13 +46,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage, optimize, sparse
-from scipy.sparse import csgraph
+from scipy import ndimage, optimize
 from scipy.spatial import cKDTree
 
 from nmmm.errors import DataFileError, InvalidInputError
 from nmmm.microstructure.base import Microstructure, as_voxel_nm
 from nmmm.microstructure.boolean import covariogram_ratio
+from nmmm.microstructure.estimation import estimate_aggregates, estimate_flakes
+from nmmm.microstructure.labelling import _as_binary, _as_image, label_particles
 from nmmm.spectra import check_finite
 
 __all__ = [
@@ -108,29 +110,6 @@ def read_image(path) -> np.ndarray:
     if hi == lo:
         raise DataFileError(f"{p}: the image is uniform (all pixels = {lo}); nothing to analyse")
     return (a - lo) / (hi - lo)
-
-
-def _as_image(image, name="image") -> np.ndarray:
-    if isinstance(image, Microstructure):
-        return image.labels != 0
-    a = np.asarray(image)
-    if a.ndim not in (2, 3):
-        raise InvalidInputError(f"{name} must be a 2-D (or 3-D) array, got shape {a.shape}")
-    if a.dtype != bool:
-        check_finite(a, name)
-    return a
-
-
-def _as_binary(binary) -> np.ndarray:
-    a = _as_image(binary, "binary")
-    if a.dtype != bool:
-        u = np.unique(a)
-        if u.size > 2 or not np.all(np.isin(u, (0, 1))):
-            raise InvalidInputError(
-                "expected a binary image (True/1 = particles); binarise grey levels first with binarize()"
-            )
-        a = a.astype(bool)
-    return a
 
 
 def binarize(image, threshold="otsu", invert: bool = False, smooth_px: float = 0.0, min_size_px: int = 0):
@@ -336,33 +315,6 @@ def granulometry(binary, radii_nm, pixel_nm=1.0, periodic: bool = True) -> dict:
         frac[k] = float(np.mean(d_out <= r))
     dist = 1 - frac / p0 if p0 > 0 else np.zeros_like(frac)
     return {"radius_nm": radii, "fraction": frac, "distribution": dist}
-
-
-def label_particles(binary, periodic: bool = False, connectivity: int = 1):
-    """Connected components (1..n) of the particle phase; ``periodic`` merges those that
-    continue across opposite edges. Returns (labels, n)."""
-    b = _as_binary(binary)
-    struct = ndimage.generate_binary_structure(b.ndim, connectivity)
-    lab, n = ndimage.label(b, structure=struct)
-    if not periodic or n == 0:
-        return lab, n
-    pairs = []
-    for ax in range(b.ndim):
-        first = np.take(lab, 0, axis=ax)
-        last = np.take(lab, -1, axis=ax)
-        m = (first > 0) & (last > 0)
-        pairs.append(np.stack([first[m], last[m]]))
-    e = np.concatenate(pairs, axis=1)
-    if e.shape[1] == 0:
-        return lab, n
-    g = sparse.coo_matrix((np.ones(e.shape[1]), (e[0], e[1])), shape=(n + 1, n + 1))
-    _, comp = csgraph.connected_components(g, directed=False)
-    # relabel 1..m in order, background stays 0
-    keep = comp[1:]
-    _, new = np.unique(keep, return_inverse=True)
-    mapping = np.concatenate([[0], new + 1])
-    lab = mapping[lab]
-    return lab, int(new.max() + 1)
 
 
 @dataclass(frozen=True)
@@ -690,10 +642,8 @@ def analyze_image(image, pixel_nm=1.0, threshold="otsu", invert: bool = False, s
     gr = granulometry(b, granulometry_radii_nm, v, periodic)
     est = None
     if model is not None:
-        from nmmm.microstructure import estimation  # imports this module: import here
-
         if model == "aggregates":
-            est = estimation.estimate_aggregates(b, v, periodic)
+            est = estimate_aggregates(b, v, periodic)
         else:  # the substrate along the rows: estimate_flakes wants it along axis 0
-            est = estimation.estimate_flakes(b.T, (v[1], v[0]), periodic, min_size_px)
+            est = estimate_flakes(b.T, (v[1], v[0]), periodic, min_size_px)
     return ImageAnalysis(img, b, v, thr, float(b.mean()), st, nn, rex, boo, hc, A, gr, est)

@@ -79,9 +79,9 @@ from scipy import ndimage, optimize
 from scipy.spatial import cKDTree
 
 from nmmm.errors import InvalidInputError
-from nmmm.microstructure.analysis import _as_binary, label_particles
 from nmmm.microstructure.base import as_voxel_nm
 from nmmm.microstructure.boolean import covariogram_ratio
+from nmmm.microstructure.labelling import _as_binary, label_particles
 
 __all__ = [
     "particle_centres",
