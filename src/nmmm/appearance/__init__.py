@@ -1,6 +1,9 @@
-"""nmmm.appearance — macro scale: colorimetry, BRDFs of paints, multi-angle colour, rendering.
+"""nmmm.appearance — macro scale: BRDFs of paints, multi-angle colour, rendering.
 
-- :mod:`~nmmm.appearance.colorimetry` — spectra → XYZ → CIELAB, ΔE2000, sRGB.
+Colorimetry (spectra → XYZ → CIELAB, ΔE2000, sRGB) lives on the ground floor in
+:mod:`nmmm.colour`; its names are re-exported here (``from nmmm.appearance import spectra_to_lab``
+keeps working).
+
 - :mod:`~nmmm.appearance.brdf` — spectral BRDFs of clear, opaque, metallic and
   interference paints (:class:`PaintBRDF`), BRDF tables for renderers.
 - :mod:`~nmmm.appearance.flakes` — flake tilt distributions, flake optics, discrete flake lists.
@@ -9,12 +12,12 @@
 - :mod:`~nmmm.appearance.render` — spectral plate renderer, stereo pairs, OpenEXR, Mitsuba.
 
 The BRDF, flake, multi-angle and sparkle names are imported on first use (PEP 562), so that
-``import nmmm.appearance`` for colorimetry stays light.
+``import nmmm.appearance`` for colour stays light.
 """
 
 import importlib
 
-from nmmm.appearance.colorimetry import (
+from nmmm.colour import (
     delta_e2000,
     spectra_to_lab,
     spectra_to_srgb,

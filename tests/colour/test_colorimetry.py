@@ -1,11 +1,15 @@
-"""Colorimetry against colour-science and published values."""
+"""Colorimetry (nmmm.colour) against colour-science and published values.
+
+This folder has no ``__init__.py`` on purpose: as a package it would be importable as ``colour``
+(pytest puts ``tests/`` on ``sys.path``) and shadow colour-science itself.
+"""
 
 import colour
 import numpy as np
 import pytest
 
 import nmmm
-from nmmm.appearance import delta_e2000, spectra_to_lab, spectra_to_srgb, spectra_to_xyz, xyz_to_srgb
+from nmmm.colour import delta_e2000, spectra_to_lab, spectra_to_srgb, spectra_to_xyz, xyz_to_srgb
 
 
 def test_perfect_white_reflector():

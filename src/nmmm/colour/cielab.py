@@ -1,0 +1,38 @@
+"""CIELAB (CIE 1976 L*a*b*) of tristimulus values and of spectra.
+
+- :func:`xyz_to_lab` — CIELAB of XYZ relative to the white of the same illuminant.
+- :func:`spectra_to_lab` — reflectance / transmittance spectra (last axis = wavelength) to
+  CIELAB under an explicit illuminant, white normalised to Y = 100.
+
+References
+----------
+- CIE 015:2018 Colorimetry, 4th ed. (CIELAB, white normalisation Y = 100).
+- T. Mansencal et al., Colour 0.4.7, Zenodo, https://doi.org/10.5281/zenodo.3757045
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nmmm.colour.tristimulus import spectra_to_xyz, white_point
+
+
+def xyz_to_lab(xyz, white_xyz) -> np.ndarray:
+    """CIELAB (CIE 015:2018) of XYZ relative to the white ``white_xyz`` (same scale)."""
+    import colour
+
+    white = np.asarray(white_xyz, dtype=float)
+    return colour.XYZ_to_Lab(np.asarray(xyz) / white[1], colour.XYZ_to_xy(white / white[1]))
+
+
+def spectra_to_lab(wavelength_nm, values, illuminant="D65", observer="2") -> np.ndarray:
+    """CIELAB (last axis L*, a*, b*) of one spectrum or a stack (last axis = wavelength),
+    white normalised to Y = 100 under the same illuminant.
+
+    >>> import numpy as np
+    >>> w = np.arange(380, 781, 5.0)
+    >>> np.round(spectra_to_lab(w, np.ones_like(w)), 6) + 0.0
+    array([ 100.,    0.,    0.])
+    """
+    xyz = spectra_to_xyz(wavelength_nm, values, illuminant, observer)
+    return xyz_to_lab(xyz, white_point(wavelength_nm, illuminant, observer))
