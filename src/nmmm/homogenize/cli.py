@@ -45,7 +45,7 @@ def homogenize():
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def run(cell, eps_items, green, solver, tol, single, as_json):
     """Effective permittivity tensor of the microstructure in CELL."""
-    from nmmm.homogenize import fft_permittivity
+    from nmmm.homogenize.fft import fft_permittivity
     from nmmm.microstructure import load_microstructure
 
     ms = load_microstructure(cell)

@@ -17,7 +17,7 @@ def materials():
 @click.argument("text")
 def search(text):
     """List database keys containing TEXT (e.g. Fe2O3)."""
-    from nmmm.materials import search as _search
+    from nmmm.materials.database import search as _search
 
     found = _search(text)
     if not found:
@@ -27,7 +27,8 @@ def search(text):
 
 
 def _load(key):
-    from nmmm.materials import get, read_csv, read_yaml
+    from nmmm.materials.database import get
+    from nmmm.materials.files import read_csv, read_yaml
 
     p = Path(key)
     if p.suffix.lower() == ".csv":
