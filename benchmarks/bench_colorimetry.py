@@ -14,7 +14,7 @@ import time
 import colour
 import numpy as np
 
-from nmmm.appearance import spectra_to_lab
+from nmmm.colour import spectra_to_lab
 
 
 def best_of(fn, repeat=3):

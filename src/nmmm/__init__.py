@@ -1,8 +1,9 @@
 """nmmm — nano–micro–meso–macro: predictive colour and appearance of paints and coatings.
 
-Data flows one way, from small scales to large, through one sub-package per scale:
-``materials`` → ``ellipsometry`` → ``ema`` → ``microstructure`` → ``homogenize`` →
-``layers`` → ``appearance`` → ``experiment`` → ``recipes``.
+Data flows one way, from small scales to large, through one sub-package per scale, on a ground
+floor (``errors``, ``spectra``, ``colour``) that every scale uses:
+``materials`` → ``ema`` → ``microstructure`` → ``homogenize`` → ``layers`` → ``ellipsometry`` →
+``appearance`` → ``experiment`` → ``recipes`` → ``demo``. Each imports only from those before it.
 
 Conventions: wavelengths in nanometres at every public interface; n + ik with k ≥ 0;
 ε = (n + ik)² with Im ε ≥ 0; time dependence exp(−iωt); volume fractions in [0, 1];
@@ -21,8 +22,8 @@ from nmmm.errors import (
 
 __version__ = "0.1.0"
 
-_SUBPACKAGES = ("materials", "ellipsometry", "ema", "microstructure", "homogenize", "layers",
-                "appearance", "experiment", "recipes", "spectra", "errors")
+_SUBPACKAGES = ("errors", "spectra", "colour", "materials", "ema", "microstructure", "homogenize", "layers",
+                "ellipsometry", "appearance", "experiment", "recipes", "demo")
 
 
 def __getattr__(name):

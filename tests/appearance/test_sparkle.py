@@ -92,7 +92,7 @@ def test_flake_glint_image_radiometry_matches_the_statistical_lobe():
     sig = 4.0
     img = flake_glint_image(paint, fl, w, wi, wo, pixel_size_um=20.0, acceptance_deg=sig, background=False)
     # expected value by quadrature over directions around wo
-    from nmmm.appearance.colorimetry import weighting_factors
+    from nmmm.colour import weighting_factors
 
     Wy = weighting_factors(w, illuminant=np.ones_like(w), observer="10")[:, 1] / 100.0
     s = np.radians(sig)

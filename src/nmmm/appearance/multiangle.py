@@ -104,7 +104,7 @@ def multiangle_reflectance(brdf, wavelength_nm, aspecular_deg=ASTM_E2539_ASPECUL
 
 
 def _spectra_to_lab(w, R, illuminant, observer):
-    from nmmm.appearance.colorimetry import spectra_to_lab, spectra_to_xyz
+    from nmmm.colour import spectra_to_lab, spectra_to_xyz
 
     return spectra_to_xyz(w, R, illuminant=illuminant, observer=observer), spectra_to_lab(
         w, R, illuminant=illuminant, observer=observer)
@@ -157,7 +157,7 @@ class MultiAngleColour:
 def multiangle_lab(brdf, wavelength_nm, aspecular_deg=ASTM_E2539_ASPECULAR_DEG, illumination_deg: float = 45.0,
                    illuminant: str = "D65", observer: str = "10") -> MultiAngleColour:
     """CIELAB of the paint at the aspecular angles (D65 / CIE 1964 10° by default, as
-    multi-angle instruments report), from :mod:`nmmm.appearance.colorimetry`.
+    multi-angle instruments report), from :mod:`nmmm.colour`.
 
     L* above 100 is normal near the specular direction of effect paints (reflectance
     factor > 1)."""
@@ -221,7 +221,7 @@ def plot_colour_travel(colours, path=None, title: str = "Colour travel"):
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    from nmmm.appearance.colorimetry import white_point, xyz_to_srgb
+    from nmmm.colour import white_point, xyz_to_srgb
 
     if isinstance(colours, MultiAngleColour):
         colours = [colours]

@@ -174,7 +174,7 @@ def flake_glint_image(paint, flakes, wavelength_nm, wi, wo, pixel_size_um: float
     tests, not a renderer.
     """
     from nmmm.appearance.brdf import flake_list_reflection
-    from nmmm.appearance.colorimetry import weighting_factors
+    from nmmm.colour import weighting_factors
 
     w = np.asarray(wavelength_nm, float)
     wo = np.asarray(wo, float).reshape(3)

@@ -72,7 +72,7 @@ def gold_ruby_glass(fraction: float = GOLD_FRACTION, shape: Shape | None = None,
 
 
 def _colour(w, T, illuminant):
-    from nmmm.appearance.colorimetry import spectra_to_lab, spectra_to_srgb
+    from nmmm.colour import spectra_to_lab, spectra_to_srgb
 
     lab = spectra_to_lab(w, T, illuminant=illuminant)
     rgb = spectra_to_srgb(w, T, illuminant=illuminant)

@@ -102,7 +102,7 @@ def hematite_demo(output_dir, progress: bool = True) -> dict:
     import matplotlib.pyplot as plt
     from tqdm import tqdm
 
-    from nmmm.appearance.colorimetry import delta_e2000, spectra_to_lab, spectra_to_srgb
+    from nmmm.colour import delta_e2000, spectra_to_lab, spectra_to_srgb
     from nmmm.layers.kubelka_munk import hiding_thickness, km_coefficients, saunderson_k1
     from nmmm.layers.paint import film_coefficients, paint_reflectance
 

@@ -149,10 +149,10 @@ def platelet_reflectance(tio2_thickness_nm, wavelength_nm, angle_deg=0.0, **stac
 def interference_colours(wavelength_nm, reflectance, illuminant: str = "D65"):
     """CIELAB and encoded sRGB of reflectance spectra (last axis = wavelength).
 
-    Uses :mod:`nmmm.appearance.colorimetry` (CIE 1931 2° observer, explicit illuminant).
+    Uses :mod:`nmmm.colour` (CIE 1931 2° observer, explicit illuminant).
     Returns ``(lab, srgb)`` with shapes ``reflectance.shape[:-1] + (3,)``.
     """
-    from nmmm.appearance.colorimetry import spectra_to_lab, spectra_to_srgb
+    from nmmm.colour import spectra_to_lab, spectra_to_srgb
 
     lab = spectra_to_lab(wavelength_nm, reflectance, illuminant=illuminant)
     srgb = spectra_to_srgb(wavelength_nm, reflectance, illuminant=illuminant)

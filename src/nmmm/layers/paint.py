@@ -317,7 +317,7 @@ def compare_km_ad(film: PaintFilm, wavelength_nm, specular: str = "included", qu
     occurs), and ``delta_e2000`` between the two colours under D65 (CIE 1931 2°).
     ``phase_function`` ("hg" or "mie") selects the adding–doubling phase function.
     """
-    from nmmm.appearance.colorimetry import delta_e2000, spectra_to_lab
+    from nmmm.colour import delta_e2000, spectra_to_lab
 
     km = paint_reflectance(film, wavelength_nm, "km", specular)
     ad = paint_reflectance(film, wavelength_nm, "ad", specular, quad_pts=quad_pts, phase_function=phase_function)

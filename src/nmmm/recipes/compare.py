@@ -32,7 +32,7 @@ def _common(res_a, res_b):
 def compare_results(res_a, res_b, illuminants=None, observer: str = "2") -> list[dict]:
     """ΔE2000 between the primary spectra of two results (linear interpolation onto the
     common grid), under each illuminant (default: those of recipe A)."""
-    from nmmm.appearance.colorimetry import delta_e2000, spectra_to_lab
+    from nmmm.colour import delta_e2000, spectra_to_lab
 
     w = _common(res_a, res_b)
     ra = np.interp(w, res_a.wavelength_nm, res_a.spectra[res_a.primary])

@@ -13,7 +13,7 @@ compounds, :func:`nmmm.ema.mixtures` or :func:`nmmm.homogenize.homogenize` for e
 :mod:`nmmm.layers.paint` (Mie + Kubelka–Munk / adding–doubling) for a paint film,
 :class:`nmmm.layers.Stack` for thin films, :func:`nmmm.ema.examples.plate_transmittance` for
 a plate, :class:`nmmm.appearance.brdf.PaintBRDF` for flake paints, and
-:mod:`nmmm.appearance.colorimetry` for CIELAB and sRGB.
+:mod:`nmmm.colour` for CIELAB and sRGB.
 """
 
 from __future__ import annotations
@@ -235,7 +235,7 @@ def _effect_brdf(recipe):
 
 def _multiangle(recipe, brdf, w, res, add_spectra: bool):
     """Reflectance factors π f at the aspecular angles of ``[viewing]`` and their CIELAB."""
-    from nmmm.appearance.colorimetry import spectra_to_lab
+    from nmmm.colour import spectra_to_lab
 
     v = recipe.viewing
     g = np.asarray(v.aspecular_deg, float)
@@ -340,7 +340,7 @@ def _stereo(recipe, brdf, w):
     light's distance (r0 at the plate's centre), encoded in sRGB under the first
     illuminant; the clear coat's mirror image of the point light is not drawn.
     """
-    from nmmm.appearance.colorimetry import spectra_to_srgb
+    from nmmm.colour import spectra_to_srgb
 
     im = recipe.image
     W, H = im.pixels
@@ -377,7 +377,7 @@ _MACRO = {"film": _film, "plate": _plate, "thin_film": _thin_film, "effect": _ef
 
 
 def _colours(recipe, res):
-    from nmmm.appearance.colorimetry import spectra_to_lab, spectra_to_srgb
+    from nmmm.colour import spectra_to_lab, spectra_to_srgb
 
     w = res.wavelength_nm
     labels = list(res.spectra)
