@@ -54,7 +54,10 @@ def test_whole_session_and_export(client):
         assert t["trial_index"] == i and not t["done"]
         for slot in ("left", "right"):
             img = client.get(t["images"][slot])
-            assert img.status_code == 200 and img.headers["content-type"] == "image/png"
+            assert img.status_code == 200 and img.headers["content-type"] == "image/bmp"
+        both = client.get(t["stimuli"]["url"])
+        assert both.status_code == 200 and both.headers["content-type"] == "application/octet-stream"
+        assert len(both.content) == t["stimuli"]["bytes"] == 2 * 3 * t["width"] * t["height"]
         r = answer(client, s, i, "left" if i % 2 else "right")
         assert r.status_code == 201 and r.json()["status"] == "stored"
     assert client.get(f"/api/session/{s}/trial").json()["done"]
@@ -117,15 +120,17 @@ def test_nothing_leaks_which_image_is_the_photograph(client, tmp_path):
         for name in names + ids:
             assert name not in text
     trial = t.json()
-    assert set(trial) == {"participant_id", "n_trials", "answered", "done", "trial_index", "images", "width", "height"}
-    # both stimuli are PNGs of the same pixel size without metadata, though the photo was a
-    # JPEG with twice the resolution of the PNG rendering
+    assert set(trial) == {"participant_id", "n_trials", "answered", "done", "trial_index", "images", "width", "height",
+                          "stimuli"}
+    # both stimuli are uncompressed BMPs of the same pixel size and length without metadata,
+    # though the photo was a JPEG with twice the resolution of the PNG rendering
     imgs = [client.get(trial["images"][slot]) for slot in ("left", "right")]
     for r in imgs:
         im = Image.open(io.BytesIO(r.content))
-        assert im.format == "PNG" and im.size == (trial["width"], trial["height"]) == (48, 32)
-        assert not {"exif", "icc_profile"} & set(im.info)
-    assert imgs[0].content != imgs[1].content
+        assert im.format == "BMP" and im.size == (trial["width"], trial["height"]) == (48, 32)
+        assert not {"exif", "icc_profile", "dpi"} & set(im.info)
+        assert "etag" not in r.headers and "last-modified" not in r.headers
+    assert imgs[0].content != imgs[1].content and len(imgs[0].content) == len(imgs[1].content)
     # the acknowledgement of a response does not say whether it was correct
     ack = answer(client, s, 0).json()
     assert "correct" not in json.dumps(ack)

@@ -6,14 +6,17 @@
 
 Participant routes (JSON; the page itself is ``static/index.html`` + ``app.js``):
 
-=======================================================  ==========================================
-``GET  /api/config``                                     question, consent, calibration note, timing
-``POST /api/participants``                               ``{participant_id, consent: true}`` -> session
-``GET  /api/session/{token}``                            progress of the session
-``GET  /api/session/{token}/trial``                      the next unanswered trial (image URLs)
-``GET  /api/session/{token}/image/{trial}/{slot}[/{eye}]`` one prepared stimulus (PNG)
-``POST /api/session/{token}/responses``                  ``{response_id, trial_index, choice, rt_ms}``
-=======================================================  ==========================================
+==========================================================  ========================================
+``GET  /api/config``                                        question, consent, calibration, timing
+``POST /api/participants``                                  ``{participant_id, consent: true,
+                                                            client_token}`` -> session
+``GET  /api/session/{token}``                               progress of the session
+``GET  /api/session/{token}/trial``                         the next unanswered trial
+``GET  /api/session/{token}/stimuli/{trial}``               every view of a trial, one raw body
+``GET  /api/session/{token}/image/{trial}/{slot}[/{eye}]``  one view, uncompressed BMP
+``POST /api/session/{token}/responses``                     ``{response_id, trial_index, choice,
+                                                            rt_ms}``
+==========================================================  ========================================
 
 Experimenter routes need the admin token (``Authorization: Bearer <token>`` or
 ``?token=<token>``): ``GET /admin`` (participants, progress, resume links),
@@ -24,13 +27,39 @@ blank interval (``blank_ms``) and both stimuli at once, in identical neutral fra
 image pixel per device pixel; the response time runs from the first frame showing them to the
 click or key press (ArrowLeft/ArrowRight, or ArrowUp/ArrowDown in stereo mode).
 
-What a participant can learn: their own progress, nothing else. Image URLs name the trial
-and the screen slot only; the JSON never says which slot holds the photograph, nor gives pair
-ids, labels or file names, and the acknowledgement of a response does not say whether it was
-correct. The server accepts no file uploads: JSON bodies are limited to 16 KiB, anything else
-(multipart uploads included) is refused with 413 / 415, and a JSON body with a field the
-route does not accept (``{"participant_id", "consent", "screen"}`` for participants, the four
-fields above for responses) is refused with 422 naming the field.
+What a participant can observe, with the browser's developer tools or any HTTP client
+------------------------------------------------------------------------------------------
+*Only the pixels differ.* The page gets all views of a trial in **one** response
+(``/stimuli/{trial}``, ``application/octet-stream``): the raw 8-bit sRGB bytes of slot 0 then
+slot 1 (stereo: the left-eye then the right-eye view of the top pair, then of the bottom pair),
+rows top to bottom, ``3 × width × height`` bytes per view, drawn into canvases by the page.
+Both images are prepared (decoded, converted to sRGB, resampled to one size) at server start
+and held in memory, so:
+
+- the length of the body is ``n_views × 3 × width × height`` whichever slot holds the
+  photograph: no compression, no encoder parameters, no metadata;
+- its headers are the same for every trial of a session (``content-type``,
+  ``content-length``, ``cache-control: no-store`` and fixed security headers; uvicorn adds
+  ``date`` and ``server``) — no ``ETag``, no ``Last-Modified``, nothing derived from a file;
+- there is no order or timing between the two images to watch: they arrive together, and
+  the work of the server (one database read, one copy of bytes in memory) does not depend on
+  which image is where.
+
+The per-view route (``/image/...``, an uncompressed 24-bit BMP whose 54-byte header follows
+from the pixel size alone) obeys the same rules, for tools that want one image per request.
+The JSON never says which slot holds the photograph, nor gives pair ids, labels or file names;
+image URLs name the trial and the screen slot only; the acknowledgement of a response does
+not say whether it was correct. A participant *can* see: their own progress, the pixel size of
+the stimuli (the same for both images of a trial), the number of trials, and the pixels.
+
+Robustness: malformed input is a 4xx with a message, never a 500 — integers beyond 18 digits,
+non-finite numbers (``NaN``, ``Infinity``, ``1e999``), JSON nested more than
+:data:`MAX_JSON_DEPTH` deep, out-of-range trial indices. A database that cannot store (disk
+full, read-only) is a 503 with a message and ``Retry-After``; nothing is acknowledged that was
+not committed. A participant whose creation reply was lost re-sends the same id with the same
+``client_token`` and resumes. The server accepts no file uploads: JSON bodies are limited to
+16 KiB, anything else (multipart uploads included) is refused with 413 / 415, and a JSON body
+with a field the route does not accept is refused with 422 naming the field.
 """
 
 from __future__ import annotations
@@ -38,26 +67,36 @@ from __future__ import annotations
 import hashlib
 import html
 import json
+import logging
+import math
 import re
 import secrets
-import shutil
-import tempfile
 import uuid
 from contextlib import asynccontextmanager
 from pathlib import Path
 
-from nmmm.errors import InvalidInputError, NmmmError
+from nmmm.errors import DataFileError, InvalidInputError, NmmmError
 from nmmm.experiment.storage import (
     DuplicateSubmissionError,
     ParticipantExistsError,
     ResponseStore,
+    StorageUnavailableError,
     TrialOrderError,
     UnknownParticipantError,
 )
 
 STATIC_DIR = Path(__file__).parent / "static"
 MAX_BODY_BYTES = 16 * 1024
+#: Deepest nesting of JSON objects/arrays accepted in a request body (the API needs 2).
+MAX_JSON_DEPTH = 4
+#: Longest integer literal accepted in a request body (digits); every integer of the API is smaller.
+MAX_INT_DIGITS = 18
+#: Seconds a client is asked to wait (``Retry-After``) when the database cannot store.
+RETRY_AFTER_S = 2
+_log = logging.getLogger("nmmm.experiment")
 _PARTICIPANT_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")
+_CLIENT_TOKEN_RE = re.compile(r"^[A-Za-z0-9_-]{16,128}$")
+_TRIAL_RE = re.compile(r"^[0-9]{1,9}$")
 _SLOTS = {False: ("left", "right"), True: ("top", "bottom")}
 _SECURITY_HEADERS = {
     "X-Content-Type-Options": "nosniff",
@@ -77,6 +116,63 @@ class HTTPProblem(Exception):
         self.message = message
 
 
+def _short(x, n: int = 40) -> str:
+    """``repr`` of a client value, cut to ``n`` characters (a 4000-digit integer stays readable)."""
+    text = repr(x)
+    return text if len(text) <= n else text[: n - 3] + "..."
+
+
+def _json_int(text: str) -> int:
+    if len(text.lstrip("-")) > MAX_INT_DIGITS:
+        raise HTTPProblem(400, f"integer {text[:20]}... with {len(text.lstrip('-'))} digits is out of range; "
+                               f"integers in this API have at most {MAX_INT_DIGITS} digits")
+    return int(text)
+
+
+def _json_float(text: str) -> float:
+    x = float(text)
+    if not math.isfinite(x):
+        raise HTTPProblem(400, f"number {text[:40]} is out of the range of a double; send a finite number")
+    return x
+
+
+def _json_constant(name: str):
+    raise HTTPProblem(400, f"{name} is not a number JSON allows; send a finite number")
+
+
+def _json_depth(x) -> int:
+    depth, stack = 0, [(x, 1)]
+    while stack:
+        v, d = stack.pop()
+        if isinstance(v, (dict, list)):
+            depth = max(depth, d)
+            stack.extend((c, d + 1) for c in (v.values() if isinstance(v, dict) else v))
+    return depth
+
+
+def parse_json_body(body: bytes):
+    """Decode a request body as strict JSON, or raise :class:`HTTPProblem` (400) saying why.
+
+    Refused: invalid UTF-8 or JSON, ``NaN`` / ``Infinity`` and numbers that overflow a double,
+    integer literals longer than :data:`MAX_INT_DIGITS` digits, nesting deeper than
+    :data:`MAX_JSON_DEPTH`.
+    """
+    try:
+        data = json.loads(body.decode("utf-8"), parse_int=_json_int, parse_float=_json_float,
+                          parse_constant=_json_constant)
+    except RecursionError:
+        raise HTTPProblem(400, f"request body is nested too deeply; at most {MAX_JSON_DEPTH} levels of "
+                               f"objects and arrays are accepted") from None
+    except UnicodeDecodeError as exc:
+        raise HTTPProblem(400, f"request body is not UTF-8 text: {exc}") from None
+    except ValueError as exc:   # JSONDecodeError, and int() of a literal beyond Python's digit limit
+        raise HTTPProblem(400, f"request body is not valid JSON: {exc}") from None
+    if _json_depth(data) > MAX_JSON_DEPTH:
+        raise HTTPProblem(400, f"request body is nested too deeply; at most {MAX_JSON_DEPTH} levels of objects "
+                               f"and arrays are accepted")
+    return data
+
+
 def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=None,
                progress: bool = False):
     """Build the ASGI application.
@@ -89,8 +185,10 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
         The SQLite response database (created if absent; WAL mode).
     admin_token : str, optional
         Token of the experimenter routes; a random one is drawn if None (``app.state.admin_token``).
-    cache_dir : path, optional
-        Where the prepared stimuli are written (a temporary directory by default).
+    cache_dir : path or False, optional
+        The content-addressed cache of prepared stimuli, reused by a restarted server
+        (:func:`nmmm.experiment.stimuli.default_cache_dir` if None; ``False``: none, prepare
+        every image at every start). The prepared stimuli are served from memory.
     """
     from starlette.applications import Starlette
     from starlette.concurrency import run_in_threadpool
@@ -100,20 +198,20 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
     from starlette.staticfiles import StaticFiles
 
     from nmmm.experiment.export import write_csv
-    from nmmm.experiment.stimuli import StimulusStore
+    from nmmm.experiment.stimuli import StimulusStore, default_cache_dir
 
     store = ResponseStore(db_path)
-    tmp = None
     try:
         store.register_pairs(pairset)
         if cache_dir is None:
-            tmp = tempfile.TemporaryDirectory(prefix="nmmm-stimuli-")
-            cache_dir = tmp.name
-        stimuli = StimulusStore(pairset, cache_dir, progress=progress)
+            try:
+                stimuli = StimulusStore(pairset, default_cache_dir(), progress=progress)
+            except DataFileError:   # no writable default cache: prepare in memory only
+                stimuli = StimulusStore(pairset, None, progress=progress)
+        else:
+            stimuli = StimulusStore(pairset, cache_dir or None, progress=progress)
     except BaseException:
         store.close()
-        if tmp is not None:
-            tmp.cleanup()
         raise
     settings = pairset.settings
     stereo = settings.stereo
@@ -121,8 +219,11 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
     admin_token = admin_token or secrets.token_urlsafe(18)
     consent_sha = hashlib.sha256(settings.consent_text.encode()).hexdigest()
 
-    def problem(status, message):
-        return JSONResponse({"error": message}, status_code=status, headers={"Cache-Control": "no-store"})
+    n_trials = pairset.n_trials
+
+    def problem(status, message, headers=None):
+        return JSONResponse({"error": message}, status_code=status,
+                            headers={"Cache-Control": "no-store", **(headers or {})})
 
     def ok(payload, status=200):
         return JSONResponse(payload, status_code=status, headers={"Cache-Control": "no-store"})
@@ -144,10 +245,7 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
             if len(body) > MAX_BODY_BYTES:
                 raise HTTPProblem(413, f"request body is too large; at most {MAX_BODY_BYTES} bytes of JSON "
                                        f"are accepted (this server takes no uploads)")
-        try:
-            data = json.loads(body.decode("utf-8"))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise HTTPProblem(400, f"request body is not valid JSON: {exc}") from None
+        data = parse_json_body(bytes(body))
         if not isinstance(data, dict):
             raise HTTPProblem(400, "request body must be a JSON object")
         extra = sorted(set(data) - set(accepted))
@@ -162,6 +260,13 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
             return await run_in_threadpool(store.participant_by_token, token)
         except UnknownParticipantError as exc:
             raise HTTPProblem(404, str(exc)) from None
+
+    def trial_of(request: Request) -> int:
+        text = request.path_params["trial"]
+        if not _TRIAL_RE.match(text) or int(text) >= n_trials:
+            raise HTTPProblem(404, f"no trial {_short(text)}: the trials of a session are numbered 0 to "
+                                   f"{n_trials - 1}")
+        return int(text)
 
     def progress_payload(part, answered):
         return {"participant_id": part["participant_id"], "n_trials": part["n_trials"],
@@ -186,21 +291,28 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
         })
 
     async def create_participant(request):
-        data = await read_json(request, ("participant_id", "consent", "screen"))
+        data = await read_json(request, ("participant_id", "consent", "screen", "client_token"))
         pid = data.get("participant_id")
         if not isinstance(pid, str) or not _PARTICIPANT_RE.match(pid.strip()):
             raise HTTPProblem(400, "participant_id must be 1-64 characters: letters, digits, '.', '_' or '-'")
         if data.get("consent") is not True:
             raise HTTPProblem(400, "consent is required: the participant must tick the consent box "
                                    "(send \"consent\": true)")
+        client_token = data.get("client_token")
+        if client_token is not None and not (isinstance(client_token, str) and _CLIENT_TOKEN_RE.match(client_token)):
+            raise HTTPProblem(400, "client_token must be 16-128 characters from letters, digits, '_' and '-' "
+                                   "(a random token the page keeps, to resume if the reply is lost)")
         screen = data.get("screen") if isinstance(data.get("screen"), dict) else {}
         try:
             part = await run_in_threadpool(
                 lambda: store.create_participant(pid.strip(), pairset, consent_sha256=consent_sha,
-                                                 user_agent=request.headers.get("user-agent"), screen=screen))
+                                                 user_agent=request.headers.get("user-agent"), screen=screen,
+                                                 client_token=client_token))
         except ParticipantExistsError as exc:
             raise HTTPProblem(409, str(exc)) from None
-        return ok({"session": part["session_token"], **progress_payload(part, 0)}, status=201)
+        answered = await run_in_threadpool(store.answered_count, part["participant_id"]) if part["resumed"] else 0
+        return ok({"session": part["session_token"], "resumed": part["resumed"], **progress_payload(part, answered)},
+                  status=200 if part["resumed"] else 201)
 
     async def session_info(request):
         part = await session_of(request)
@@ -215,33 +327,47 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
         payload = progress_payload(part, answered)
         if trial is None:
             return ok(payload)
-        base = f"/api/session/{part['session_token']}/image/{trial['trial_index']}"
-        width, height = stimuli.size(trial["pair_id"], "left" if stereo else None)
+        session_base = f"/api/session/{part['session_token']}"
+        base = f"{session_base}/image/{trial['trial_index']}"
+        width, height = stimuli.size(trial["pair_id"])
         if stereo:
             images = {slot: {"left_eye": f"{base}/{slot}/left", "right_eye": f"{base}/{slot}/right"}
                       for slot in slots}
+            order = [[slot, eye] for slot in slots for eye in ("left_eye", "right_eye")]
         else:
             images = {slot: f"{base}/{slot}" for slot in slots}
-        payload.update({"trial_index": trial["trial_index"], "images": images,
-                        "width": width, "height": height})
+            order = [[slot, None] for slot in slots]
+        payload.update({"trial_index": trial["trial_index"], "images": images, "width": width, "height": height,
+                        "stimuli": {"url": f"{session_base}/stimuli/{trial['trial_index']}", "encoding": "rgb8",
+                                    "views": order, "bytes": len(order) * 3 * width * height}})
         return ok(payload)
 
-    async def image(request):
+    async def trial_record(request):
         part = await session_of(request)
+        index = trial_of(request)
+        try:
+            return await run_in_threadpool(store.trial, part["participant_id"], index)
+        except InvalidInputError as exc:
+            raise HTTPProblem(404, str(exc)) from None
+
+    stimulus_headers = {"Cache-Control": "no-store"}
+
+    async def trial_stimuli(request):
+        trial = await trial_record(request)
+        return Response(stimuli.trial_body(trial["pair_id"], trial["photo_slot"]),
+                        media_type="application/octet-stream", headers=stimulus_headers)
+
+    async def image(request):
         slot_name = request.path_params["slot"]
         eye = request.path_params.get("eye")
         if slot_name not in slots:
-            raise HTTPProblem(404, f"unknown slot {slot_name!r}; expected one of {list(slots)}")
+            raise HTTPProblem(404, f"unknown slot {_short(slot_name)}; expected one of {list(slots)}")
         if stereo != (eye is not None) or eye not in (None, "left", "right"):
             raise HTTPProblem(404, "stereo images need /left or /right; mono images take no eye")
-        try:
-            trial = await run_in_threadpool(store.trial, part["participant_id"], request.path_params["trial"])
-        except InvalidInputError as exc:
-            raise HTTPProblem(404, str(exc)) from None
+        trial = await trial_record(request)
         slot = slots.index(slot_name)
         role = "photo" if slot == trial["photo_slot"] else "rendered"
-        return FileResponse(stimuli.path(trial["pair_id"], role, eye), media_type="image/png",
-                            headers={"Cache-Control": "private, max-age=3600"})
+        return Response(stimuli.bmp(trial["pair_id"], role, eye), media_type="image/bmp", headers=stimulus_headers)
 
     async def respond(request):
         part = await session_of(request)
@@ -253,13 +379,17 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
             raise HTTPProblem(400, "response_id must be a UUID generated by the client for this response") from None
         tidx = data.get("trial_index")
         if not isinstance(tidx, int) or isinstance(tidx, bool) or tidx < 0:
-            raise HTTPProblem(400, f"trial_index must be a non-negative integer, got {tidx!r}")
+            raise HTTPProblem(400, f"trial_index must be a non-negative integer, got {_short(tidx)}")
+        if tidx >= n_trials:
+            raise HTTPProblem(409, f"there is no trial {tidx} for this participant (trials 0 to {n_trials - 1})")
         choice = data.get("choice")
-        if choice not in slots:
-            raise HTTPProblem(400, f"choice must be one of {list(slots)}, got {choice!r}")
+        if not isinstance(choice, str) or choice not in slots:
+            raise HTTPProblem(400, f"choice must be one of {list(slots)}, got {_short(choice)}")
         rt = data.get("rt_ms")
         if isinstance(rt, bool) or not isinstance(rt, (int, float)):
-            raise HTTPProblem(400, f"rt_ms must be a number of milliseconds, got {rt!r}")
+            raise HTTPProblem(400, f"rt_ms must be a number of milliseconds, got {_short(rt)}")
+        if not 0 <= rt <= 3_600_000:
+            raise HTTPProblem(400, f"rt_ms must be a finite number of milliseconds in [0, 3600000], got {_short(rt)}")
         pid = part["participant_id"]
         try:
             result = await run_in_threadpool(store.record_response, pid, tidx, rid, slots.index(choice), float(rt))
@@ -321,8 +451,14 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
                 response = await fn(request)
             except HTTPProblem as exc:
                 response = problem(exc.status, exc.message)
+            except StorageUnavailableError as exc:
+                response = problem(503, str(exc), {"Retry-After": str(RETRY_AFTER_S)})
             except NmmmError as exc:
                 response = problem(400, str(exc))
+            except Exception as exc:   # a bug: say so in JSON (uvicorn would answer plain text)
+                _log.exception("internal error on %s %s", request.method, request.url.path)
+                response = problem(500, f"internal error ({type(exc).__name__}); nothing was stored by this "
+                                        f"request; please report it to the experimenter")
             response.headers.update(_SECURITY_HEADERS)
             return response
         return endpoint
@@ -334,8 +470,9 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
         Route("/api/participants", wrap(create_participant), methods=["POST"]),
         Route("/api/session/{token}", wrap(session_info)),
         Route("/api/session/{token}/trial", wrap(next_trial)),
-        Route("/api/session/{token}/image/{trial:int}/{slot}", wrap(image)),
-        Route("/api/session/{token}/image/{trial:int}/{slot}/{eye}", wrap(image)),
+        Route("/api/session/{token}/stimuli/{trial}", wrap(trial_stimuli)),
+        Route("/api/session/{token}/image/{trial}/{slot}", wrap(image)),
+        Route("/api/session/{token}/image/{trial}/{slot}/{eye}", wrap(image)),
         Route("/api/session/{token}/responses", wrap(respond), methods=["POST"]),
         Route("/admin", wrap(admin_page)),
         Route("/admin/export.csv", wrap(admin_export)),
@@ -349,8 +486,6 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
             yield
         finally:
             store.close()
-            if tmp is not None:
-                tmp.cleanup()
 
     async def not_found(request, exc):
         status = getattr(exc, "status_code", 404)
@@ -362,29 +497,32 @@ def create_app(pairset, db_path, *, admin_token: str | None = None, cache_dir=No
     app.state.admin_token = admin_token
     app.state.store = store
     app.state.pairset = pairset
+    app.state.stimuli = stimuli
     return app
 
 
 def serve(pairs_toml, db_path, *, host: str = "127.0.0.1", port: int = 8000, admin_token: str | None = None,
-          log_level: str = "warning", echo=print):
-    """Load ``pairs_toml``, prepare the stimuli, and serve the experiment with uvicorn (blocking)."""
+          log_level: str = "warning", echo=print, cache_dir=None):
+    """Load ``pairs_toml``, prepare the stimuli, and serve the experiment with uvicorn (blocking).
+
+    Prepared stimuli are cached on disk by content (``cache_dir``, default
+    :func:`nmmm.experiment.stimuli.default_cache_dir`): a restart after a crash reads them back
+    instead of preparing them again, so participants wait for the restart only.
+    """
     import uvicorn
 
     from nmmm.experiment.pairs import load_pairs
 
     pairset = load_pairs(pairs_toml)
-    # prepared stimuli live in one temporary folder per database, emptied at every start (a
-    # killed server leaves it behind; the next start reuses the place)
-    key = hashlib.sha256(str(Path(db_path).resolve()).encode()).hexdigest()[:16]
-    cache_dir = Path(tempfile.gettempdir()) / f"nmmm-stimuli-{key}"
-    shutil.rmtree(cache_dir, ignore_errors=True)
     app = create_app(pairset, db_path, admin_token=admin_token, progress=True, cache_dir=cache_dir)
     shown = "127.0.0.1" if host in ("0.0.0.0", "::") else host
+    c = app.state.stimuli.counts
     echo(f"nmmm experiment: {len(pairset)} pair(s), {pairset.n_trials} trial(s) per participant, "
-         f"responses in {db_path}")
+         f"responses in {db_path}; stimuli: {c['prepared']} prepared, {c['reused']} reused from "
+         f"{app.state.stimuli.cache_dir or 'no cache'}")
     echo(f"participants: http://{shown}:{port}/")
     echo(f"experimenter: http://{shown}:{port}/admin?token={app.state.admin_token}")
     uvicorn.run(app, host=host, port=port, log_level=log_level, access_log=False)
 
 
-__all__ = ["create_app", "serve", "MAX_BODY_BYTES"]
+__all__ = ["create_app", "serve", "parse_json_body", "MAX_BODY_BYTES", "MAX_JSON_DEPTH", "MAX_INT_DIGITS"]

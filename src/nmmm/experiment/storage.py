@@ -10,6 +10,16 @@ Durability: the database runs in WAL mode with ``synchronous=FULL``; every respo
 own committed transaction before the server answers, so killing the server (or the machine)
 loses no acknowledged response, and a participant resumes at their first unanswered trial.
 
+Storage failures: a full disk (``SQLITE_FULL``), a read-only file or file system, an I/O
+error or a database locked by another program raise :class:`StorageUnavailableError` (the
+server answers 503 with its message): the transaction is rolled back, so nothing is
+acknowledged that was not stored, and the same request succeeds once the cause is removed.
+
+Participants: creating one is idempotent for the browser that created it. The page sends a
+random ``client_token`` with the participant id (only its SHA-256 is stored); a retry with the
+same id and token (e.g. after the reply was lost in a server crash) resumes that participant
+instead of being refused.
+
 Idempotence: a response carries a client-generated ``response_id`` (a UUID) and
 ``(participant_id, trial_index)`` is unique. Replaying the same submission returns the stored
 response unchanged; a different answer to an already answered trial is refused
@@ -24,7 +34,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import secrets
 import sqlite3
 import threading
@@ -35,7 +44,7 @@ import numpy as np
 
 from nmmm.errors import DataFileError, InvalidInputError
 
-SCHEMA_VERSION = "1"
+SCHEMA_VERSION = "2"   # 2: participants.client_token_sha256
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -55,7 +64,8 @@ CREATE TABLE IF NOT EXISTS participants (
     consent_sha256 TEXT NOT NULL,
     user_agent TEXT,
     screen TEXT,
-    created_at TEXT NOT NULL
+    created_at TEXT NOT NULL,
+    client_token_sha256 TEXT
 );
 CREATE TABLE IF NOT EXISTS trials (
     participant_id TEXT NOT NULL REFERENCES participants(participant_id),
@@ -93,6 +103,41 @@ class DuplicateSubmissionError(InvalidInputError):
 
 class TrialOrderError(InvalidInputError):
     """A response for a trial that is not the participant's next one."""
+
+
+class StorageUnavailableError(DataFileError):
+    """The database cannot store anything now (disk full, read-only, I/O error, locked).
+
+    Nothing was stored; the same request may be repeated once the cause is removed.
+    """
+
+
+_STORAGE_CAUSES = {
+    "SQLITE_FULL": "the disk (or the database's size limit) is full; free space on the disk that holds it",
+    "SQLITE_READONLY": "the database is read-only; make the file and its directory writable",
+    "SQLITE_IOERR": "the disk reported an input/output error; check the disk that holds it",
+    "SQLITE_BUSY": "another program holds a lock on the database; close it",
+    "SQLITE_LOCKED": "another connection holds a lock on the database; close it",
+    "SQLITE_CANTOPEN": "the database file cannot be opened; check that its directory exists and is writable",
+    "SQLITE_PERM": "the operating system refused access to the database; check its permissions",
+}
+
+
+def _unavailable(db_path, exc: sqlite3.Error) -> StorageUnavailableError:
+    name = getattr(exc, "sqlite_errorname", "") or ""
+    cause = next((v for k, v in _STORAGE_CAUSES.items() if name.startswith(k)), None)
+    text = str(exc).lower()
+    if cause is None:
+        cause = ("the disk is full; free space on the disk that holds it" if "full" in text else
+                 "the database is read-only; make the file and its directory writable" if "readonly" in text
+                 else "the database cannot be written now; check the disk and the file")
+    return StorageUnavailableError(
+        f"the response database {str(db_path)!r} cannot store anything ({exc}): {cause}. Nothing was stored; "
+        f"repeat the request once this is fixed")
+
+
+def _token_digest(client_token: str | None) -> str | None:
+    return None if client_token is None else hashlib.sha256(client_token.encode("utf-8")).hexdigest()
 
 
 def utc_now() -> str:
@@ -143,6 +188,7 @@ class ResponseStore:
         self._local = threading.local()
         self._readers: list[sqlite3.Connection] = []
         self._closed = False
+        self._con = None
         try:
             self._con = sqlite3.connect(str(self.db_path), check_same_thread=False, isolation_level=None,
                                         timeout=30.0)
@@ -152,8 +198,15 @@ class ResponseStore:
             self._con.execute(f"PRAGMA synchronous={synchronous}")
             self._con.execute("PRAGMA foreign_keys=ON")
             self._con.executescript(_SCHEMA)
-            self._con.execute("INSERT OR IGNORE INTO meta VALUES ('schema_version', ?)", (SCHEMA_VERSION,))
+            cols = {r[1] for r in self._con.execute("PRAGMA table_info(participants)")}
+            if "client_token_sha256" not in cols:   # a database written by schema version 1
+                self._con.execute("ALTER TABLE participants ADD COLUMN client_token_sha256 TEXT")
+            self._con.execute("INSERT OR REPLACE INTO meta VALUES ('schema_version', ?)", (SCHEMA_VERSION,))
         except sqlite3.DatabaseError as exc:
+            if getattr(self, "_con", None) is not None:
+                self._con.close()
+            if isinstance(exc, sqlite3.OperationalError):
+                raise _unavailable(self.db_path, exc) from None
             raise DataFileError(f"{str(self.db_path)!r} is not a usable SQLite response database: {exc}") from None
         self._con.row_factory = sqlite3.Row
 
@@ -173,14 +226,25 @@ class ResponseStore:
 
     # -- transactions -------------------------------------------------------------------
     def _tx(self, fn):
+        """Run ``fn(connection)`` in one IMMEDIATE transaction and commit it; any failure rolls
+        it back. SQLite errors of the disk or the file become :class:`StorageUnavailableError`."""
         with self._lock:
-            self._con.execute("BEGIN IMMEDIATE")
+            if self._closed:
+                raise StorageUnavailableError(f"the response store {str(self.db_path)!r} is closed")
             try:
-                out = fn(self._con)
-            except BaseException:
-                self._con.execute("ROLLBACK")
-                raise
-            self._con.execute("COMMIT")
+                self._con.execute("BEGIN IMMEDIATE")
+                try:
+                    out = fn(self._con)
+                    self._con.execute("COMMIT")
+                except BaseException:
+                    if self._con.in_transaction:
+                        try:
+                            self._con.execute("ROLLBACK")
+                        except sqlite3.Error:
+                            pass
+                    raise
+            except sqlite3.OperationalError as exc:
+                raise _unavailable(self.db_path, exc) from None
             return out
 
     def _reader(self) -> sqlite3.Connection:
@@ -198,8 +262,11 @@ class ResponseStore:
 
     def _read(self, sql, args=()):
         if self._closed:
-            raise DataFileError(f"the response store {str(self.db_path)!r} is closed")
-        return [dict(r) for r in self._reader().execute(sql, args).fetchall()]
+            raise StorageUnavailableError(f"the response store {str(self.db_path)!r} is closed")
+        try:
+            return [dict(r) for r in self._reader().execute(sql, args).fetchall()]
+        except sqlite3.OperationalError as exc:
+            raise _unavailable(self.db_path, exc) from None
 
     # -- pairs --------------------------------------------------------------------------
     def register_pairs(self, pairset):
@@ -226,29 +293,41 @@ class ResponseStore:
     # -- participants -------------------------------------------------------------------
     def create_participant(self, participant_id: str, pairset, *, consent_sha256: str,
                            user_agent: str | None = None, screen: dict | None = None,
-                           seed: int | None = None) -> dict:
+                           seed: int | None = None, client_token: str | None = None) -> dict:
         """Register a participant, draw their trials, and return their record.
 
-        Raises :class:`ParticipantExistsError` if the id is taken.
+        The record has ``resumed = False``. If the id is taken and ``client_token`` matches the
+        one it was created with, that participant's record is returned with ``resumed = True``
+        (a retried creation whose reply was lost); otherwise :class:`ParticipantExistsError`.
         """
         token = secrets.token_urlsafe(24)
         seed = secrets.randbits(62) if seed is None else int(seed)
         trials = assign_trials([p.pair_id for p in pairset.pairs], pairset.settings.repetitions, seed)
         now = utc_now()
 
+        digest = _token_digest(client_token)
+
         def fn(con):
-            if con.execute("SELECT 1 FROM participants WHERE participant_id=?", (participant_id,)).fetchone():
+            old = con.execute("SELECT session_token, client_token_sha256 FROM participants WHERE participant_id=?",
+                              (participant_id,)).fetchone()
+            if old is not None:
+                if digest is not None and old["client_token_sha256"] is not None and secrets.compare_digest(
+                        old["client_token_sha256"], digest):
+                    return old["session_token"], True
                 raise ParticipantExistsError(
                     f"participant id {participant_id!r} has already started; resume from the same browser, "
                     f"or ask the experimenter for the resume link (admin page), or use a new id")
-            con.execute("INSERT INTO participants VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            con.execute("INSERT INTO participants (participant_id, session_token, seed, stereo, n_trials, "
+                        "consent_at, consent_sha256, user_agent, screen, created_at, client_token_sha256) "
+                        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                         (participant_id, token, seed, int(pairset.settings.stereo), len(trials), now,
-                         consent_sha256, (user_agent or "")[:500], json.dumps(screen or {})[:500], now))
+                         consent_sha256, (user_agent or "")[:500], json.dumps(screen or {})[:500], now, digest))
             con.executemany("INSERT INTO trials VALUES (?, ?, ?, ?, ?)",
                             [(participant_id, i, pid, rep, slot) for i, (pid, rep, slot) in enumerate(trials)])
+            return token, False
 
-        self._tx(fn)
-        return self.participant_by_token(token)
+        session, resumed = self._tx(fn)
+        return {**self.participant_by_token(session), "resumed": resumed}
 
     def participant_by_token(self, token: str) -> dict:
         """The participant record of a session token; :class:`UnknownParticipantError` if none."""
@@ -280,6 +359,8 @@ class ResponseStore:
         return self._read("SELECT COUNT(*) AS n FROM responses WHERE participant_id=?", (participant_id,))[0]["n"]
 
     def trial(self, participant_id: str, trial_index: int) -> dict:
+        if not (isinstance(trial_index, int) and 0 <= trial_index < 2**62):
+            raise InvalidInputError(f"participant has no trial {str(trial_index)[:40]}")
         rows = self._read("SELECT * FROM trials WHERE participant_id=? AND trial_index=?",
                           (participant_id, int(trial_index)))
         if not rows:
@@ -300,10 +381,14 @@ class ResponseStore:
         TrialOrderError
             The trial is not the participant's next unanswered one.
         """
+        if not (isinstance(trial_index, int) and not isinstance(trial_index, bool) and 0 <= trial_index < 2**62):
+            raise TrialOrderError(f"there is no trial {str(trial_index)[:40]} for this participant")
         if chosen_slot not in (0, 1):
             raise InvalidInputError(f"chosen slot must be 0 or 1, got {chosen_slot!r}")
-        if not (isinstance(rt_ms, (int, float)) and math.isfinite(rt_ms) and 0 <= rt_ms <= 3_600_000):
-            raise InvalidInputError(f"rt_ms must be a finite number of milliseconds in [0, 3600000], got {rt_ms!r}")
+        # compare before any float(): an integer such as 10**400 has no float
+        if not (isinstance(rt_ms, (int, float)) and not isinstance(rt_ms, bool) and 0 <= rt_ms <= 3_600_000):
+            raise InvalidInputError(f"rt_ms must be a finite number of milliseconds in [0, 3600000], "
+                                    f"got {str(rt_ms)[:40]}")
 
         def fn(con):
             prev = con.execute("SELECT * FROM responses WHERE response_id=?", (response_id,)).fetchone()
@@ -369,4 +454,4 @@ def read_responses(db_path) -> list[dict]:
 
 
 __all__ = ["ResponseStore", "assign_trials", "read_responses", "utc_now", "UnknownParticipantError",
-           "ParticipantExistsError", "DuplicateSubmissionError", "TrialOrderError"]
+           "ParticipantExistsError", "DuplicateSubmissionError", "TrialOrderError", "StorageUnavailableError"]
