@@ -3,10 +3,14 @@
 // shows what it is given and sends back the chosen screen position and the response time.
 // Unacknowledged responses are kept in localStorage and re-sent with the same response id
 // (the server stores each response exactly once), so a server restart or a reload loses nothing.
+// Both images of a trial arrive in ONE response of raw, uncompressed sRGB bytes (same length
+// whichever side holds the photograph) and are drawn into canvases here: nothing but the
+// pixels differs between the two sides.
 "use strict";
 
 const KEY_SESSION = "nmmm.experiment.session";
 const KEY_PENDING = "nmmm.experiment.pending";
+const KEY_CLIENT = "nmmm.experiment.client";   // {participant_id, token}: resumes a creation whose reply was lost
 const $ = (id) => document.getElementById(id);
 
 const state = { config: null, session: null, trial: null, shownAt: null, accepting: false, images: {} };
@@ -43,7 +47,11 @@ async function api(path, options = {}, { retry = true } = {}) {
       return { status: resp.status, body };
     }
     if (!retry) throw new Error("server unavailable");
-    setStatus("Connection to the server lost — retrying…");
+    let why = "Connection to the server lost";
+    if (resp) {   // 503: the server cannot store now (its message says why); nothing was stored
+      try { why = (await resp.json()).error || why; } catch (e) { why = `Server error ${resp.status}`; }
+    }
+    setStatus(why + " — retrying…");
     await sleep(delay);
     delay = Math.min(delay * 2, 2000);
   }
@@ -99,34 +107,45 @@ async function start(event) {
   setError("");
   const pid = $("participant-id").value.trim();
   if (!$("consent").checked) return setError("Please tick the consent box to take part.");
+  // a random token sent with the id: if the reply is lost (server crash), the retry resumes
+  let client = null;
+  try { client = JSON.parse(localStorage.getItem(KEY_CLIENT) || "null"); } catch (e) { client = null; }
+  if (!client || client.participant_id !== pid) {
+    client = { participant_id: pid, token: uuid4().replace(/-/g, "") };
+    localStorage.setItem(KEY_CLIENT, JSON.stringify(client));
+  }
   const r = await postJSON("/api/participants", {
-    participant_id: pid, consent: true,
+    participant_id: pid, consent: true, client_token: client.token,
     screen: { width: screen.width, height: screen.height, dpr: window.devicePixelRatio },
   });
-  if (r.status !== 201) return setError(r.body.error || `error ${r.status}`);
+  if (r.status !== 201 && r.status !== 200) return setError(r.body.error || `error ${r.status}`);
   state.session = r.body.session;
   localStorage.setItem(KEY_SESSION, state.session);
   showReady(r.body);
 }
 
-function loadImage(url) {
-  return new Promise((resolve, reject) => {
-    const img = new Image();
-    img.draggable = false;
-    img.alt = "";
-    img.onload = () => resolve(img);
-    img.onerror = () => reject(new Error("image failed: " + url));
-    img.src = url;
-  });
+// one view of raw sRGB bytes (rows top to bottom) -> a canvas of width x height pixels
+function rgbCanvas(bytes, width, height) {
+  const canvas = document.createElement("canvas");
+  canvas.width = width;
+  canvas.height = height;
+  const ctx = canvas.getContext("2d");
+  const img = ctx.createImageData(width, height);
+  const out = img.data;
+  for (let i = 0, j = 0; i < bytes.length; i += 3, j += 4) {
+    out[j] = bytes[i]; out[j + 1] = bytes[i + 1]; out[j + 2] = bytes[i + 2]; out[j + 3] = 255;
+  }
+  ctx.putImageData(img, 0, 0);
+  return canvas;
 }
 
 // one image pixel per device pixel (a calibrated display shows the rendering's detail as
 // computed); both images share one pixel size, so CSS limits scale them alike if too large
-function deviceExact(img) {
+function deviceExact(canvas) {
   const dpr = window.devicePixelRatio || 1;
-  img.style.width = img.naturalWidth / dpr + "px";
-  img.style.height = "auto";
-  return img;
+  canvas.style.width = canvas.width / dpr + "px";
+  canvas.style.height = "auto";
+  return canvas;
 }
 
 function buildStage(trial, imgs) {
@@ -150,21 +169,20 @@ function buildStage(trial, imgs) {
   }
 }
 
+// every view of the trial in one response: raw RGB, views in trial.stimuli.views order
 async function fetchImages(trial) {
+  const spec = trial.stimuli;
+  const resp = await fetch(spec.url, { cache: "no-store" });
+  if (!resp.ok) throw new Error(`stimuli: error ${resp.status}`);
+  const buf = new Uint8Array(await resp.arrayBuffer());
+  if (buf.length !== spec.bytes) throw new Error(`stimuli: ${buf.length} bytes, expected ${spec.bytes}`);
+  const n = 3 * trial.width * trial.height;
   const out = {};
-  const jobs = [];
-  for (const slot of state.config.slots) {
-    const spec = trial.images[slot];
-    if (typeof spec === "string") {
-      jobs.push(loadImage(spec).then((img) => { out[slot] = img; }));
-    } else {
-      out[slot] = {};
-      for (const eye of ["left_eye", "right_eye"]) {
-        jobs.push(loadImage(spec[eye]).then((img) => { out[slot][eye] = img; }));
-      }
-    }
-  }
-  await Promise.all(jobs);
+  spec.views.forEach(([slot, eye], k) => {
+    const canvas = rgbCanvas(buf.subarray(k * n, (k + 1) * n), trial.width, trial.height);
+    if (eye) (out[slot] = out[slot] || {})[eye] = canvas;
+    else out[slot] = canvas;
+  });
   return out;
 }
 
