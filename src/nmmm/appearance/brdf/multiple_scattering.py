@@ -1,0 +1,97 @@
+"""The multiple-scattering term of :class:`~nmmm.appearance.brdf.PaintBRDF` (term 4): the
+escaping fraction F_ms(λ) of the light the single-scattering terms miss, from adding–doubling
+of the azimuth-averaged oriented-mirror flake layer over the Lambertian base.
+
+The lobe itself, (1 − E⁰(θi))(1 − E⁰(θo)) / (π (1 − Ē⁰)) · F_ms, is tabulated in
+:mod:`~nmmm.appearance.brdf.tables` (Kulla & Conty 2017; without flakes F_ms follows their
+closed form).
+
+References
+----------
+- H. C. van de Hulst, *Multiple Light Scattering* (1980) — adding–doubling.
+- C. Kulla, A. Conty, "Revisiting physically based shading at Imageworks", SIGGRAPH
+  2017 course — multiple-scattering compensation lobe F_ms.
+- C. Kelemen, L. Szirmay-Kalos, Eurographics 2001 short papers — energy-compensated
+  coupled specular/diffuse BRDF.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nmmm.appearance.brdf.interpolation import _deg, _lerp1, _lerp_table
+
+
+def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, n_doublings: int = 16):
+    """F_ms(λ): multiply scattered light that escapes, relative to the lossless paint.
+
+    Azimuthally averaged (0th Fourier mode: exact for hemispherical fluxes) transport
+    inside the coat, on Gauss–Legendre polar nodes. The flake layer's reflection and
+    transmission matrices come from adding–doubling (van de Hulst 1980) of a thin
+    sublayer whose kernel is the oriented-mirror scattering per unit optical depth,
+    p(h) R(|u·h|) / (4 μ_in) into upward *and* downward directions (flake–flake paths
+    included), with extinction τ_e/τ · a(μ)/μ; the Lambertian base (ρ) is added
+    below, and the coat from below transmits T out of the escape cone and mirrors the
+    rest back down. For diffuse light entering the coat this gives the total escaping
+    fraction e(λ) (1 exactly for the lossless paint); removing the single-scattering
+    escape s (``sub``: the terms 2–3 albedo averaged over diffuse incidence, per unit
+    light entering) leaves the multiply scattered part, and
+    F_ms = (e − s) / (1 − s⁰), so that the diffuse-incidence albedo of the model is the
+    transport result and F_ms = 1 for a lossless paint (white furnace untouched).
+
+    This replaced a bounce model keeping only single flake scattering per pass, which
+    lost 20–40 % of the lossless light per bounce and overestimated F_ms for absorbing
+    paints by ×1.25 (τ = 1) to ×2 (τ = 2); checked against the photon tracer of
+    ``tests/appearance/test_brdf_montecarlo.py``.
+    """
+    n, L = tab.n, tab.L
+    xg, wg = np.polynomial.legendre.leggauss(n_mu)
+    th = 0.25 * np.pi * (xg + 1)  # internal polar angle nodes
+    mu, sn = np.cos(th), np.sin(th)
+    dmu = sn * 0.25 * np.pi * wg  # ∫ dμ weights
+    a_mu = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu  # flake extinction per unit τ
+    ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi  # azimuth differences in [0, π), weights ×2
+    uk = np.stack([sn, 0 * sn, -mu], -1)  # incoming travel directions (downward)
+    G = np.zeros((2, 2, n_mu, n_mu, L))  # [up/down out][actual/lossless], (j out, k in, L)
+    for q in ph:
+        for s_out, sz in enumerate((1.0, -1.0)):
+            uj = np.stack([sn * np.cos(q), sn * np.sin(q), sz * mu], -1)
+            hv = uj[:, None, :] - uk[None, :, :]  # ∥ the mirror's normal
+            hn = np.linalg.norm(hv, axis=-1)
+            hn = np.where(hn > 1e-12, hn, 1.0)
+            c = np.abs(np.sum(hv * uk[None, :, :], axis=-1)) / hn
+            wgt = tab.tilt.pdf(np.abs(hv[..., 2]) / hn) / (4 * mu[None, :]) * (dmu[:, None] * 2 * np.pi / n_phi)
+            dc = _deg(c.ravel())
+            G[s_out, 0] += wgt[..., None] * _lerp_table(tab.Rf, dc, tab.step).reshape(wgt.shape + (L,))
+            G[s_out, 1] += wgt[..., None] * _lerp_table(tab.Rf0, dc, tab.step).reshape(wgt.shape + (L,))
+    # the lossless kernel removes exactly τ_e/τ · a/μ per unit τ (corrects the quadrature)
+    target = a_mu[:, None] * (tab.tau_e / tab.tau)[None, :]  # (k, L)
+    col0 = (G[0, 1] + G[1, 1]).sum(axis=0)
+    scale = np.where(col0 > 0, target / np.where(col0 > 0, col0, 1.0), 0.0)
+    eye = np.eye(n_mu)
+    delta = tab.tau / 2.0 ** n_doublings
+    mu_c = np.sqrt(1 - 1 / (n * n))
+    mu_ext = np.sqrt(np.clip(1 - n * n * (1 - mu * mu), 0, 1))
+    Tint = np.where(mu[:, None] > mu_c, _lerp_table(tab.Tc, _deg(mu_ext), tab.step), 0.0).T  # (L, K)
+    d0 = Tint * (mu * dmu)[None, :]  # diffuse light entering the coat
+    d0 = d0 / d0.sum(axis=1, keepdims=True)
+    lamb = 2 * mu * dmu
+    lamb = lamb / lamb.sum()  # Lambertian redistribution over the nodes
+    escaped = []
+    for v, rho in ((0, tab.rho), (1, np.ones(L))):
+        R = np.moveaxis(delta * G[0, v] * scale[None], -1, 0)  # (L, j, k)
+        T = np.moveaxis(delta * G[1, v] * scale[None] + eye[..., None] * (1 - delta * target)[None], -1, 0)
+        for _ in range(n_doublings):  # symmetric layer: R2 = R + T R (1 − R R)⁻¹ T, T2 = T (1 − R R)⁻¹ T
+            M = np.linalg.solve(eye[None] - R @ R, T)
+            R, T = R + T @ R @ M, T @ M
+        Rb = rho[:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
+        Rtot = R + T @ np.linalg.solve(eye[None] - Rb @ R, Rb @ T)  # layer over the base
+        u = np.linalg.solve(eye[None] - Rtot * (1 - Tint)[:, None, :],
+                            np.einsum("ljk,lk->lj", Rtot, d0)[..., None])[..., 0]
+        escaped.append(np.sum(Tint * u, axis=1))
+    e, e0 = escaped
+    norm = np.maximum(1.0 - tab.Es_bar, 1e-12)
+    s, s0 = sub / norm, sub0 / norm
+    with np.errstate(divide="ignore", invalid="ignore"):
+        F = np.where(e0 - s0 > 1e-12, (e - s) / (e0 - s0), 0.0)
+    return np.clip(F, 0.0, 1.0)
