@@ -6,16 +6,37 @@ Commands
   plate, 332 × 240 flake cells) to ``OUT.exr`` (spectral, Fichet et al. 2021 layout) and
   ``OUT.png`` (sRGB); ``--stereo`` writes ``OUT_left.*`` and ``OUT_right.*``.
 - ``nmmm render object OUT`` — a sphere or panel painted with the same paint, through
-  Mitsuba 3 (``pip install 'nmmm[mitsuba]'``; ``apt-get install libllvm15``).
+  Mitsuba 3 (``pip install 'nmmm[mitsuba]'``; a system libLLVM >= 17: ``apt-get install libllvm19``).
+  Without them it prints one line saying what to install and exits with status 2.
+
+``OUT`` is a file stem (``out/plate`` writes ``out/plate.exr`` and ``out/plate.png``); a name
+ending in ``.exr`` or ``.png`` is taken without that suffix, and a folder (``out/``) gets
+``plate.*`` or ``object.*`` inside it. Missing parent folders are created.
 """
 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import click
 
 PAINTS = ("grey-metallic", "metallic", "interference", "solid", "white")
+
+
+def _output_stem(output: str, default_name: str) -> str:
+    """The file stem that OUTPUT names (see the module docstring); its folder is created."""
+    p = Path(output)
+    if output.endswith(("/", "\\")) or p.is_dir() or p.name in ("", ".", ".."):
+        p = p / default_name
+    elif p.suffix.lower() in (".exr", ".png"):
+        p = p.with_suffix("")
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise click.BadParameter(f"cannot create the folder {str(p.parent)!r}: {exc.strerror or exc}; "
+                                 "give a writable OUTPUT such as out/plate", param_hint="OUTPUT") from None
+    return str(p)
 
 
 def _plate(paint: str, cells, tilt_deg: float, optical_depth: float, base: float, seed: int):
@@ -48,6 +69,15 @@ def _lights(light: str, zenith: float, azimuth: float, irradiance: float, env: s
     lights = [DirectionalLight.from_angles(zenith, azimuth, light, irradiance)] if irradiance > 0 else []
     environment = UniformEnvironment(env, env_radiance) if env else None
     return lights, environment
+
+
+class _MissingDependency(click.ClickException):
+    """A missing optional dependency (Mitsuba 3, libLLVM): one line on stderr, exit status 2."""
+
+    exit_code = 2
+
+    def show(self, file=None):
+        click.echo(self.format_message(), err=True)
 
 
 @click.group(name="render")
@@ -99,6 +129,7 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
     from nmmm.appearance.render.plate import render_plate, render_stereo_plate
     from nmmm.errors import NmmmError
 
+    output = _output_stem(output, "plate")
     try:
         plate = _plate(paint, cells, tilt_deg, optical_depth, base, seed)
         lights, env = _lights(light, light_zenith_deg, light_azimuth_deg, irradiance, environment, env_radiance)
@@ -128,12 +159,20 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
 @click.option("--spp", type=int, default=64, show_default=True, help="Samples per pixel.")
 @click.option("--stereo", is_flag=True)
 @click.option("--interocular-mm", type=float, default=65.0, show_default=True)
+@click.option("--variant", type=click.Choice(("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral")),
+              default="llvm_ad_spectral", show_default=True,
+              help="Mitsuba variant: scalar_spectral needs no libLLVM but is much slower.")
 def object_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_deg, light_azimuth_deg, irradiance,
                environment, env_radiance, width, height, exposure, colourspace, shape, distance_mm, fov_deg, spp, stereo,
-               interocular_mm):
-    """Render a painted 3-D object with Mitsuba 3 to OUTPUT.exr and OUTPUT.png."""
+               interocular_mm, variant):
+    """Render a painted 3-D object with Mitsuba 3 to OUTPUT.exr and OUTPUT.png.
+
+    Needs Mitsuba 3 and, for its LLVM variant, libLLVM >= 17; without them: one line saying
+    what to install, exit status 2."""
+    from nmmm.appearance.render.mitsuba_paint import MitsubaUnavailableError
     from nmmm.errors import NmmmError
 
+    output = _output_stem(output, "object")
     try:
         from nmmm.appearance.render.mitsuba_scene import render_object
 
@@ -142,7 +181,9 @@ def object_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith
                               env_radiance)
         imgs = render_object(plate.smooth_brdf, shape=shape, lights=lights, environment=env,
                              distance_mm=distance_mm, fov_deg=fov_deg, resolution=(width, height), spp=spp,
-                             stereo=stereo, interocular_mm=interocular_mm)
+                             stereo=stereo, interocular_mm=interocular_mm, variant=variant)
+    except MitsubaUnavailableError as exc:  # a missing system library: one line, exit 2
+        raise _MissingDependency(f"nmmm render object: {exc}") from None
     except NmmmError as exc:
         raise click.ClickException(str(exc)) from exc
     named = dict(zip(("_left", "_right"), imgs)) if stereo else {"": imgs[0]}

@@ -101,14 +101,17 @@ def require_mitsuba(variant: str = "llvm_ad_spectral"):
     try:
         import mitsuba as mi
     except ImportError as exc:
-        raise MitsubaUnavailableError(f"Mitsuba 3 is not installed ({exc}); {INSTALL_HINT}") from exc
+        raise MitsubaUnavailableError(f"Mitsuba 3 is not installed ({exc}): pip install 'nmmm[mitsuba]' "
+                                      f"(its LLVM variant also needs libLLVM >= {_MIN_LLVM}: apt-get install libllvm19)"
+                                      ) from exc
     if variant.startswith("llvm"):
         found = _llvm_versions()
         if not found or max(v for v, _ in found) < _MIN_LLVM:
             have = ", ".join(sorted({f"{v}" for v, _ in found})) or "none"
             raise MitsubaUnavailableError(
-                f"Mitsuba's {variant} variant needs libLLVM >= {_MIN_LLVM} (found: {have}); {INSTALL_HINT}; "
-                "or use variant='scalar_spectral' (slow)"
+                f"Mitsuba's {variant} variant needs libLLVM >= {_MIN_LLVM} (found: {have}): apt-get install libllvm19 "
+                f"(or point DRJIT_LIBLLVM_PATH at a libLLVM >= {_MIN_LLVM}; Dr.Jit >= 1.0 fails on 15/16 with "
+                "'Cannot select fmaximum'), or use the slow variant 'scalar_spectral'"
             )
     if variant not in mi.variants():
         raise MitsubaUnavailableError(f"this Mitsuba build lacks the {variant!r} variant (has {mi.variants()}); "
