@@ -1,6 +1,8 @@
 """``nmmm experiment``: serve the 2AFC validation experiment, analyse and export its responses.
 
 - ``nmmm experiment serve pairs.toml --db responses.sqlite [--host 127.0.0.1 --port 8000]``
+  (``--check``: load every image, prepare the stimuli, open the database, then exit — a dry run
+  before a session)
 - ``nmmm experiment stats responses.sqlite [--plot out.png] [--delta 0.1] [--pooling cluster-robust]``
 - ``nmmm experiment export responses.sqlite -o out.csv``
 """
@@ -30,10 +32,27 @@ def experiment():
                    "Env: NMMM_EXPERIMENT_ADMIN_TOKEN.")
 @click.option("--log-level", default="warning", show_default=True,
               type=click.Choice(["critical", "error", "warning", "info", "debug"]))
-def serve(pairs_toml, db_path, host, port, admin_token, log_level):
+@click.option("--check", is_flag=True,
+              help="Load every image, prepare the stimuli and open the database, report, then exit "
+                   "without serving (a dry run before a session).")
+def serve(pairs_toml, db_path, host, port, admin_token, log_level, check):
     """Serve the experiment described by PAIRS_TOML; every response is committed to --db."""
     from nmmm.experiment.app import serve as run
 
+    if check:
+        from nmmm.experiment.app import create_app
+        from nmmm.experiment.pairs import load_pairs
+
+        pairset = load_pairs(pairs_toml)
+        app = create_app(pairset, db_path, admin_token=admin_token, progress=False)
+        try:
+            c = app.state.stimuli.counts
+            click.echo(f"nmmm experiment: {len(pairset)} pair(s), {pairset.n_trials} trial(s) per participant, "
+                       f"responses in {db_path}; stimuli: {c['prepared']} prepared, {c['reused']} reused; "
+                       f"ready to serve on http://{host}:{port}/ (run without --check)")
+        finally:
+            app.state.store.close()
+        return
     run(pairs_toml, db_path, host=host, port=port, admin_token=admin_token, log_level=log_level,
         echo=lambda m: click.echo(m, err=True))
 
