@@ -95,7 +95,7 @@ def main():
     ap.add_argument("--participants", type=int, default=50)
     ap.add_argument("--pairs", type=int, default=10)
     args = ap.parse_args()
-    from nmmm.experiment.examples import synthetic_pairs
+    from nmmm.experiment.simulation import synthetic_pairs
     from nmmm.experiment.pairs import load_pairs
 
     work = Path(tempfile.mkdtemp())

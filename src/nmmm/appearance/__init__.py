@@ -9,6 +9,8 @@ keeps working).
 - :mod:`~nmmm.appearance.flakes` — flake tilt distributions, flake optics, discrete flake lists.
 - :mod:`~nmmm.appearance.multiangle` — CIELAB at the ASTM E2194 / E2539 geometries, flop index.
 - :mod:`~nmmm.appearance.sparkle` — sparkle and graininess of images (renders or photographs).
+- :mod:`~nmmm.appearance.deposit` — effect paints from a simulated flake deposit
+  (:func:`grey_metallic_from_deposit`: the same flakes as a list and as the statistical BRDF).
 - :mod:`~nmmm.appearance.render` — spectral plate renderer, stereo pairs, OpenEXR, Mitsuba.
 
 The BRDF, flake, multi-angle and sparkle names are imported on first use (PEP 562), so that
@@ -37,7 +39,7 @@ _LAZY = {
     "multiangle_lab": "multiangle", "flop_index": "multiangle", "FLOP_INDEX_METHODS": "multiangle",
     "aspecular_directions": "multiangle", "plot_colour_travel": "multiangle",
     "ASTM_E2194_ASPECULAR_DEG": "multiangle", "ASTM_E2539_ASPECULAR_DEG": "multiangle",
-    "sparkle_graininess": "sparkle",
+    "sparkle_graininess": "sparkle", "grey_metallic_from_deposit": "deposit",
 }
 
 

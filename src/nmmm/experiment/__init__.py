@@ -11,8 +11,8 @@ better than chance, the prediction is visually validated.
 - :mod:`nmmm.experiment.stats` — proportion correct, binomial tests, d' for 2AFC, Wilson and
   Clopper-Pearson intervals, TOST equivalence, pooling over observers, plot.
 - :mod:`nmmm.experiment.export` — CSV export.
-- :mod:`nmmm.experiment.examples` — :func:`~nmmm.experiment.examples.demo` and
-  :func:`~nmmm.experiment.examples.simulate_responses`.
+- :mod:`nmmm.experiment.simulation` — :func:`synthetic_pairs` (image pairs to try the server) and
+  :func:`simulate_responses` (simulated observers). The worked example is :func:`nmmm.demo.experiment.demo`.
 
 Command line: ``nmmm experiment serve | stats | export``.
 """
@@ -25,13 +25,13 @@ _LAZY = {
     "make_pairs_file": "pairs", "read_responses": "storage", "analyse_responses": "stats",
     "binomial_test": "stats", "critical_count": "stats", "dprime_2afc": "stats", "format_report": "stats",
     "plot_analysis": "stats", "pooled_proportion": "stats", "proportion_ci": "stats", "tost_binomial": "stats",
-    "create_app": "app",
+    "create_app": "app", "synthetic_pairs": "simulation", "simulate_responses": "simulation",
 }
 
 __all__ = [
     "ExperimentSettings", "PairSet", "StimulusPair", "load_pairs", "make_pairs_file", "read_responses",
     "analyse_responses", "binomial_test", "critical_count", "dprime_2afc", "format_report", "plot_analysis",
-    "pooled_proportion", "proportion_ci", "tost_binomial", "create_app",
+    "pooled_proportion", "proportion_ci", "tost_binomial", "create_app", "synthetic_pairs", "simulate_responses",
 ]
 
 

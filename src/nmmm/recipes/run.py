@@ -11,7 +11,7 @@
 Each physical step calls the public API of its package: :mod:`nmmm.materials` for the
 compounds, :func:`nmmm.ema.mixtures` or :func:`nmmm.homogenize.homogenize` for each level,
 :mod:`nmmm.layers.paint` (Mie + Kubelka–Munk / adding–doubling) for a paint film,
-:class:`nmmm.layers.Stack` for thin films, :func:`nmmm.ema.examples.plate_transmittance` for
+:class:`nmmm.layers.Stack` for thin films, :func:`nmmm.layers.thick_plate.plate_transmittance` for
 a plate, :class:`nmmm.appearance.brdf.PaintBRDF` for flake paints, and
 :mod:`nmmm.colour` for CIELAB and sRGB.
 """
@@ -188,7 +188,7 @@ def _film(recipe, mats, w, res):
 
 
 def _plate(recipe, mats, w, res):
-    from nmmm.ema.examples import plate_transmittance
+    from nmmm.layers.thick_plate import plate_transmittance
 
     p = recipe.plate
     for name in (p.compound, p.reference_compound):
