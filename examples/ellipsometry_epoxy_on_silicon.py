@@ -14,7 +14,7 @@ Run: python examples/ellipsometry_epoxy_on_silicon.py [output_dir]
 
 import sys
 
-from nmmm.ellipsometry.examples import epoxy_on_silicon
+from nmmm.demo.ellipsometry import epoxy_on_silicon
 
 out_dir = sys.argv[1] if len(sys.argv) > 1 else "ellipsometry_out"
 res = epoxy_on_silicon(out_dir)

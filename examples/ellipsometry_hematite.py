@@ -13,7 +13,7 @@ import sys
 
 import numpy as np
 
-from nmmm.ellipsometry.examples import hematite_two_orientations
+from nmmm.demo.ellipsometry import hematite_two_orientations
 
 out_dir = sys.argv[1] if len(sys.argv) > 1 else "ellipsometry_out"
 res = hematite_two_orientations(out_dir)

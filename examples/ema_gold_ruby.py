@@ -8,7 +8,7 @@ colour swatches under D65 and A, gold-rod variants and the Kramers–Kronig chec
 
 import sys
 
-from nmmm.ema.examples import gold_ruby_demo
+from nmmm.demo.gold_ruby import gold_ruby_demo
 
 if __name__ == "__main__":
     result = gold_ruby_demo(sys.argv[1] if len(sys.argv) > 1 else "ema_gold_ruby_output")

@@ -18,7 +18,7 @@ Run this script to do 1 and, instead of real participants, 3 on 40 simulated obs
 from pathlib import Path
 
 from nmmm.experiment import analyse_responses, format_report, load_pairs, plot_analysis, read_responses
-from nmmm.experiment.examples import simulate_responses, synthetic_pairs
+from nmmm.experiment.simulation import simulate_responses, synthetic_pairs
 
 out = Path("experiment_out")
 pairs_toml = synthetic_pairs(out / "pairs", n_pairs=10, repetitions=2, viewing_distance_cm=50)

@@ -5,7 +5,7 @@ Run: ``python examples/homogenize_hematite.py [output_dir]`` (about a minute on 
 
 import sys
 
-from nmmm.homogenize.examples import demo
+from nmmm.demo.homogenization import demo
 
 if __name__ == "__main__":
     out = demo(sys.argv[1] if len(sys.argv) > 1 else "out/homogenize")

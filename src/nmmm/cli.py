@@ -26,10 +26,24 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "render": ("nmmm.appearance.render.cli:render", "Spectral rendering of plates and objects."),
     "experiment": ("nmmm.experiment.cli:experiment", "The 2AFC visual validation experiment."),
     "run": ("nmmm.recipes.cli:run", "Run a TOML recipe."),
-    "demo": ("nmmm.recipes.cli:demo", "Run the seed paper's worked examples into one report."),
+    "demo": ("nmmm.demo.cli:demo", "Run the seed paper's worked examples into one report."),
     "compare": ("nmmm.recipes.cli:compare", "Compare two recipes (substitution view)."),
     "sweep": ("nmmm.recipes.cli:sweep", "Parameter sweep of a recipe on Dask."),
 }
+
+
+def _with_scale_tours(name, command):
+    """Attach to a scale's group its worked-example commands (``nmmm ema gold-ruby``, ...): they live
+    in :mod:`nmmm.demo.cli`, since a scale package never imports the demo."""
+    if isinstance(command, click.Group):
+        try:
+            from nmmm.demo.cli import SCALE_COMMANDS
+        except ImportError:  # the demo broken: the scale's own commands still work
+            return command
+        for sub in SCALE_COMMANDS.get(name, ()):
+            if sub.name not in command.commands:
+                command.add_command(sub)
+    return command
 
 
 class LazyGroup(click.Group):
@@ -45,7 +59,7 @@ class LazyGroup(click.Group):
         module_name, attr = target.split(":")
         try:
             module = importlib.import_module(module_name)
-            return getattr(module, attr)
+            return _with_scale_tours(name, getattr(module, attr))
         except (ImportError, AttributeError) as exc:
             @click.command(name=name, help=f"{help_text} (unavailable: {exc})")
             def unavailable():

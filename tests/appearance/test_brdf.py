@@ -298,7 +298,7 @@ def test_solid_hematite_paint_from_layers_matches_saunderson_0_d():
     from its own quadrature of the internal Fresnel reflectance)."""
     from nmmm.appearance.brdf import opaque_paint_from_film
     from nmmm.layers.distributions import lognormal
-    from nmmm.layers.examples import hematite
+    from nmmm.demo.hematite import hematite
     from nmmm.layers.paint import PaintFilm, paint_reflectance
 
     w = np.arange(400.0, 701.0, 50.0)

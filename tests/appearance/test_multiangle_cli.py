@@ -1,9 +1,8 @@
-"""The ``nmmm appearance`` commands and the demo hook."""
+"""The ``nmmm appearance`` commands (the demo hook: tests/demo/test_appearance.py)."""
 
 import json
 
 import numpy as np
-import pytest
 from click.testing import CliRunner
 
 from nmmm.appearance.cli import appearance
@@ -42,14 +41,3 @@ def test_commands_refuse_bad_files(tmp_path, capsys):
     assert "does not exist" in capsys.readouterr().err
     assert main(["appearance", "table", "--paint", "solid", "--out", str(tmp_path / "t.txt")]) == 2
     assert "use .nc or .csv" in capsys.readouterr().err
-
-
-@pytest.mark.slow
-def test_demo_hook(tmp_path):
-    from nmmm.appearance.examples import demo
-
-    r = demo(tmp_path)
-    assert set(r) == {"title", "figures", "tables", "text"}
-    assert all((tmp_path / p).exists() or __import__("os").path.exists(p) for p in r["figures"])
-    assert (tmp_path / "grey_metallic_brdf_table.nc").exists()
-    assert "flop index" in r["text"]

@@ -1,4 +1,4 @@
-"""The command line: simulate -> fit -> plots and Material files; examples and demo hook."""
+"""The command line: simulate -> fit -> plots and Material files; examples (the demo hook: tests/demo)."""
 
 import numpy as np
 import pytest
@@ -72,21 +72,6 @@ def test_top_level_command_reports_bad_file(tmp_path, capsys):
     code = main(["ellipsometry", "fit", str(p), "--model", str(m)])
     assert code == 2
     assert "missing column" in capsys.readouterr().err
-
-
-def test_demo_hook(tmp_path):
-    """The worked examples: epoxy thickness and Cauchy parameters within 3σ of the truth; hematite
-    ordinary/extraordinary constants within 5 median σ of Querry's."""
-    from pathlib import Path
-
-    from nmmm.ellipsometry.examples import demo
-
-    s = demo(tmp_path)
-    assert set(s) >= {"title", "figures", "tables", "text"}
-    assert all(Path(f).exists() for f in s["figures"])
-    assert all(abs(row["z"]) < 3 for row in s["tables"]["epoxy_fit"])
-    h = s["tables"]["hematite"]
-    assert max(h["max_dev_ordinary"], h["max_dev_extraordinary"]) < 6 * h["median_sigma_n"]
 
 
 def test_joint_fit_of_two_files(tmp_path):

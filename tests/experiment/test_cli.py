@@ -1,4 +1,4 @@
-"""``nmmm experiment`` commands: stats, export, serve's refusal of bad input; the demo hook."""
+"""``nmmm experiment`` commands: stats, export, serve's refusal of bad input (the demo hook: tests/demo)."""
 
 from __future__ import annotations
 
@@ -8,9 +8,8 @@ import json
 import pytest
 
 from nmmm.cli import main
-from nmmm.experiment.examples import demo, simulate_responses, synthetic_pairs
+from nmmm.experiment.simulation import simulate_responses, synthetic_pairs
 from nmmm.experiment.pairs import load_pairs
-from nmmm.experiment.stats import critical_count
 
 
 @pytest.fixture(scope="module")
@@ -52,13 +51,3 @@ def test_commands_refuse_bad_input(tmp_path, capsys, simulated_db):
     assert "does not exist" in capsys.readouterr().err
     assert main(["experiment", "stats", str(simulated_db), "--plot", str(tmp_path / "no" / "p.png")]) == 2
     assert "does not exist" in capsys.readouterr().err
-
-
-def test_demo_hook(tmp_path):
-    summary = demo(tmp_path)
-    assert set(summary) >= {"title", "figures", "tables", "text"}
-    assert all((tmp_path / "experiment_2afc.png").exists() for _ in summary["figures"])
-    table = summary["tables"]["experiment_summary"]
-    assert table["observers"] == 40 and table["trials per observer"] == 20
-    assert table["critical count (one-sided, alpha 0.05)"] == critical_count(20) == 15
-    assert (tmp_path / "experiment_responses.csv").exists()

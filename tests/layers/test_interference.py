@@ -7,7 +7,6 @@ import tmm
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.interference import (
-    demo,
     interference_colours,
     muscovite,
     platelet_reflectance,
@@ -93,10 +92,3 @@ def test_bad_input():
         platelet_stack(100.0, mica_thickness_nm=0.0)
     with pytest.raises(InvalidInputError):
         platelet_stack(np.nan)
-
-
-def test_demo(tmp_path):
-    out = demo(tmp_path)
-    assert set(out) >= {"title", "figures", "tables", "text"}
-    for f in out["figures"]:
-        assert (tmp_path / f.split("/")[-1]).stat().st_size > 1000

@@ -132,14 +132,3 @@ def test_bad_indices_and_solver():
         paint_reflectance(PaintFilm(PIG, 1.5 - 1e-6j, monodisperse(D), 0.05, 1e4), W)
     with pytest.raises(InvalidInputError):
         paint_reflectance(PaintFilm(PIG, N_B, monodisperse(D), 0.05, 1e4), W, solver="monte-carlo")
-
-
-@pytest.mark.slow
-def test_hematite_demo(tmp_path):
-    from nmmm.layers.examples import hematite_demo
-
-    out = hematite_demo(tmp_path)
-    assert all(p.endswith(".png") for p in out["figures"])
-    L = [r["L_ad"] for r in out["tables"]["grain_size"]]
-    # the painters' rule: beyond ~250 nm, bigger grains look darker
-    assert L[2] > L[3] > L[4] > L[5]

@@ -1,7 +1,6 @@
-"""``nmmm materials search/show/plot`` and the materials demo hook."""
+"""``nmmm materials search/show/plot`` (the materials demo hook: tests/demo/test_materials.py)."""
 
 import numpy as np
-import pytest
 from click.testing import CliRunner
 
 from nmmm.materials.cli import materials
@@ -42,15 +41,3 @@ def test_plot_writes_png(tmp_path):
                                        "--range-nm", "400", "800"])
     assert r.exit_code == 0, r.output
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10_000
-
-
-def test_demo_hook(tmp_path):
-    from nmmm.materials.examples import demo
-
-    s = demo(tmp_path)
-    assert set(s) >= {"title", "figures", "tables", "text"}
-    for f in s["figures"]:
-        assert (tmp_path / str(f).split("/")[-1]).stat().st_size > 10_000
-    rows = {r["compound"]: r for r in s["tables"]["compounds"]}
-    assert rows["silica"]["n_550nm"] == pytest.approx(_malitson(550.0), abs=1e-4)  # rounded to 4 decimals
-    assert rows["silica"]["k_550nm"] == 0

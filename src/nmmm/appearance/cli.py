@@ -7,7 +7,8 @@ Commands
 - ``nmmm appearance table`` — export a paint's BRDF over (θ_h, θ_d, λ) to .nc or .csv.
 - ``nmmm appearance sparkle IMAGE --pixel-size-um 10`` — sparkle and graininess of a
   photograph or render (PNG/JPEG/TIFF; ``--encoding srgb`` for photographs).
-- ``nmmm appearance demo OUTDIR`` — the worked examples (figures, CSV, BRDF table).
+- ``nmmm appearance demo OUTDIR`` — the worked examples (figures, CSV, BRDF table; in
+  :mod:`nmmm.demo.cli`, attached to this group by :mod:`nmmm.cli`).
 """
 
 from __future__ import annotations
@@ -118,15 +119,3 @@ def sparkle(image, pixel_size_um, encoding, threshold):
         raise DataFileError(f"cannot read the image {image!r} ({exc}); give a PNG, JPEG, TIFF or .npy array") from exc
     m = sparkle_graininess(arr, pixel_size_um, encoding=encoding, threshold_contrast=threshold)
     click.echo(json.dumps(m.as_dict(), indent=1))
-
-
-@appearance.command()
-@click.argument("output_dir", type=click.Path(file_okay=False))
-def demo(output_dir):
-    """Worked examples: multi-angle colour, colour travel, BRDF plots, sparkle."""
-    from nmmm.appearance.examples import demo as run
-
-    r = run(output_dir)
-    click.echo(r["text"])
-    for f in r["figures"]:
-        click.echo(f"  {f}")

@@ -17,7 +17,7 @@ Formulas (complex ε arrays that broadcast; fractions in [0, 1]):
 
 Materials across scales: :func:`mix` (-> a Material), :func:`mix_tensor`, :class:`Inclusion`.
 Causality: :func:`nmmm.ema.causality.kk_check_mixture`. Worked example:
-:func:`nmmm.ema.examples.gold_ruby_demo`.
+:func:`nmmm.demo.gold_ruby.gold_ruby_demo`.
 
 References
 ----------

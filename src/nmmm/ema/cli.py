@@ -4,7 +4,8 @@
 - ``nmmm ema mix --host KEY --inclusion KEY:FRACTION[:SHAPE[:RADIUS_NM]] ...`` — n, k of the
   mixture on a wavelength grid (CSV to stdout or ``-o``). SHAPE: ``sphere``, ``cube``,
   ``spheroid=ASPECT`` (random orientation).
-- ``nmmm ema gold-ruby -o DIR`` — the seed's gold-ruby glass example (figures + tables).
+- ``nmmm ema gold-ruby -o DIR`` — the seed's gold-ruby glass example (figures + tables; the command
+  lives in :mod:`nmmm.demo.cli` and is attached to this group by :mod:`nmmm.cli`).
 """
 
 from __future__ import annotations
@@ -80,18 +81,6 @@ def mix_cmd(host, inclusions, method, start_nm, stop_nm, step_nm, output):
         click.echo(f"wrote {output} ({m.name})")
     else:
         click.echo(text, nl=False)
-
-
-@ema.command("gold-ruby")
-@click.option("-o", "--output-dir", default="gold_ruby", show_default=True, type=click.Path(file_okay=False))
-def gold_ruby(output_dir):
-    """The seed's gold-ruby glass example: n, k vs silica, transmission, colours, rods."""
-    from nmmm.ema.examples import gold_ruby_demo
-
-    out = gold_ruby_demo(output_dir)
-    click.echo(out["text"])
-    for p in out["figures"]:
-        click.echo(f"figure: {p}")
 
 
 __all__ = ["ema"]

@@ -12,7 +12,7 @@ Public API
 - Validity: :func:`check_periodicity`, :func:`periodize_mirror`, :func:`check_quasistatic`,
   :func:`size_parameter`, :class:`QuasiStaticWarning`.
 - Reference cells with exact answers: :mod:`nmmm.homogenize.geometries`.
-- Demo hook: :func:`nmmm.homogenize.examples.demo` (hematite coating at 5/7/10 %).
+- Worked example: :func:`nmmm.demo.homogenization.demo` (hematite coating at 5/7/10 %).
 - CLI: ``nmmm homogenize run CELL --eps 0=2.25 --eps 1=-50+20j``, ``nmmm homogenize demo DIR``.
 
 Method in one paragraph: the Galerkin (projection) form of the periodic Lippmann-Schwinger

@@ -2,7 +2,8 @@
 
 - ``nmmm homogenize run CELL --eps 0=2.25 --eps 1=-50+20j`` — effective tensor of a
   microstructure file (TIFF/npz from ``nmmm micro generate``) for constant permittivities.
-- ``nmmm homogenize demo OUTPUT_DIR`` — the hematite-coating worked example.
+- ``nmmm homogenize demo OUTPUT_DIR`` — the hematite-coating worked example (in :mod:`nmmm.demo.cli`,
+  attached to this group by :mod:`nmmm.cli`).
 """
 
 from __future__ import annotations
@@ -66,15 +67,3 @@ def run(cell, eps_items, green, solver, tol, single, as_json):
     for row in np.asarray(r.tensor):
         click.echo("  " + "  ".join(f"{z.real:+.6f}{z.imag:+.6f}i" for z in row))
     click.echo(f"projections per loading: {np.asarray(r.iterations).tolist()}")
-
-
-@homogenize.command("demo")
-@click.argument("output_dir", type=click.Path(file_okay=False))
-def demo(output_dir):
-    """Hematite coating at 5/7/10 %: FFT vs Maxwell Garnett, Bruggeman, HS bounds."""
-    from nmmm.homogenize.examples import demo as run_demo
-
-    out = run_demo(output_dir)
-    click.echo(out["text"])
-    for f in out["figures"]:
-        click.echo(f"wrote {f}")

@@ -7,7 +7,8 @@
   Saunderson and adding–doubling side by side), and the CIELAB of each under D65.
 - ``nmmm layers stack --layer 2.4:100 --layer 1.46:5000:i --substrate 1.52 --angle-deg 0
   --angle-deg 45`` — Rs, Rp, Ts, Tp, R, T of a layer stack (``:i`` marks an incoherent layer).
-- ``nmmm layers hematite -o DIR`` — the seed's hematite paint example (figures + tables).
+- ``nmmm layers hematite -o DIR`` — the seed's hematite paint example (figures + tables; in
+  :mod:`nmmm.demo.cli`, attached to this group by :mod:`nmmm.cli`).
 
 An index is a complex number written ``n+kj`` or ``n+ki`` (``k >= 0``) or a database key
 such as ``main/TiO2/Siefke`` (:func:`nmmm.materials.get`). Results are CSV, to stdout or to
@@ -176,18 +177,6 @@ def stack_cmd(layer_specs, ambient, substrate, angles, start_nm, stop_nm, step_n
         for j in range(a.size)
     ]
     _emit(["wavelength_nm", "angle_deg", "Rs", "Rp", "Ts", "Tp", "R", "T"], rows, output)
-
-
-@layers.command("hematite")
-@click.option("-o", "--output-dir", default="hematite", show_default=True, type=click.Path(file_okay=False))
-def hematite_cmd(output_dir):
-    """The seed's hematite paint: 5/7/10 %, grain-size darkening, KM vs AD (figures + tables)."""
-    from nmmm.layers.examples import hematite_demo
-
-    out = hematite_demo(output_dir)
-    click.echo(out["text"])
-    for p in out["figures"]:
-        click.echo(f"figure: {p}")
 
 
 __all__ = ["layers", "parse_index"]

@@ -1,9 +1,8 @@
-"""Click commands ``nmmm run``, ``nmmm demo``, ``nmmm compare`` and ``nmmm sweep``
-(mapped from :mod:`nmmm.cli`)."""
+"""Click commands ``nmmm run``, ``nmmm compare`` and ``nmmm sweep`` (mapped from :mod:`nmmm.cli`;
+``nmmm demo`` is :mod:`nmmm.demo.cli`)."""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import click
@@ -89,24 +88,6 @@ def run(recipe, output, overrides, no_progress, pair_with):
     click.echo(f"report: {Path(res.files['report']).resolve()}" if "report" in res.files else f"outputs in {out.resolve()}")
     if pair_with is not None:
         click.echo(f"pairs: {pairs} (nmmm experiment serve {pairs})")
-
-
-@click.command("demo")
-@click.option("-o", "--output", "output", default="nmmm-demo", show_default=True, help="Output folder.")
-@click.option("--quick", is_flag=True, help="Only the shipped recipes (skip the packages' demo hooks).")
-@click.option("--only", multiple=True, help="Run only sections whose name contains this text (repeatable).")
-@click.option("--no-progress", is_flag=True, help="Hide progress messages.")
-def demo(output, quick, only, no_progress):
-    """Run the seed paper's worked examples into one HTML report."""
-    from nmmm.recipes.demo import run_demo
-
-    report, failed, skipped = run_demo(_output_dir(output), quick=quick, only=only or None, progress=not no_progress)
-    click.echo(f"report: {Path(report).resolve()}")
-    if skipped:
-        click.echo("not available: " + ", ".join(skipped))
-    if failed:
-        click.echo(f"{len(failed)} section(s) failed: " + "; ".join(failed), err=True)
-        sys.exit(1)
 
 
 @click.command("compare")

@@ -64,7 +64,7 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
     """Run both recipes into ``out_dir/A`` and ``out_dir/B`` and write ``out_dir/report.html``.
 
     Returns ``{"rows": [...], "report": path, "a": RunResult, "b": RunResult, "section": dict}``
-    (``section``: the comparison as a report section, for :mod:`nmmm.recipes.demo`).
+    (``section``: the comparison as a report section, for :mod:`nmmm.demo`).
     """
     import matplotlib
 

@@ -1,8 +1,7 @@
-"""``nmmm render`` CLI and the demo hook (small sizes)."""
+"""``nmmm render`` CLI, small sizes (the demo hook: tests/demo/test_rendering.py)."""
 
 import json
 
-import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -29,16 +28,6 @@ def test_cli_stereo_and_errors(tmp_path):
     away = CliRunner().invoke(render, ["plate", str(tmp_path / "y"), "--look-at-mm", "0", "0", "900",
                                        "--width", "8", "--height", "8"])
     assert away.exit_code != 0 and "looks away" in away.output
-
-
-@pytest.mark.slow
-def test_demo_hook(tmp_path):
-    from nmmm.appearance.render.examples import demo
-
-    r = demo(tmp_path)
-    assert all((tmp_path / f.split("/")[-1]).exists() for f in r["figures"])
-    assert r["tables"]["render"]["shared_glint_fraction"] < 0.3
-    assert np.isfinite(r["tables"]["render"]["seconds"])
 
 
 @pytest.mark.slow

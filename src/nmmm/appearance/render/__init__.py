@@ -8,7 +8,6 @@
   extra ``nmmm[mitsuba]``; the LLVM variant needs a system libLLVM >= 17).
 - :mod:`~nmmm.appearance.render.mitsuba_envmap` — ``nmmm_envmap``, a spectral lat-long sky.
 - :mod:`~nmmm.appearance.render.mitsuba_scene` — painted sphere / panel / plate scenes, stereo.
-- :mod:`~nmmm.appearance.render.examples` — ``demo(output_dir)``.
 - ``nmmm render plate|object`` — :mod:`~nmmm.appearance.render.cli`.
 
 The Mitsuba modules are imported on demand (``from nmmm.appearance.render.mitsuba_scene

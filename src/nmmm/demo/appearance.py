@@ -5,9 +5,11 @@
   paints, in-plane BRDF plots of a solid, a metallic and an interference paint, a sparkle
   image of the metallic paint's flake deposit with its sparkle/graininess metrics, and the
   metallic BRDF exported as a (θ_h, θ_d, λ) table. Returns a summary dict for the report.
-- :func:`grey_metallic_from_deposit` — the grey metallic paint built from a
-  :func:`nmmm.microstructure.flake_deposit` in the seed's 450 µm × 450 µm × 20 µm cell:
-  the same flakes give the discrete list (sparkle) and the statistical BRDF.
+
+The grey metallic paint comes from :func:`nmmm.appearance.deposit.grey_metallic_from_deposit`
+(a :func:`nmmm.microstructure.flake_deposit` in the seed's 450 µm × 450 µm × 20 µm cell: the same
+flakes give the discrete list (sparkle) and the statistical BRDF); the solid hematite paint from
+:mod:`nmmm.demo.hematite`'s compounds.
 """
 
 from __future__ import annotations
@@ -18,23 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
+from nmmm.appearance.deposit import grey_metallic_from_deposit
+
 __all__ = ["demo", "grey_metallic_from_deposit"]
-
-
-def grey_metallic_from_deposit(seed: int = 1, fraction: float = 0.008, tilt_std_deg: float = 6.0,
-                               base_reflectance: float = 0.35, coat_thickness_nm: float = 30e3):
-    """(paint BRDF, flake list) of the seed's grey metallic paint: Al flakes (Rakić) of
-    20 µm mean diameter, 300 nm thick, deposited in a 450 × 450 × 20 µm cell
-    (:func:`nmmm.microstructure.flake_deposit`), under a 30 µm clear coat (n = 1.5), over
-    a grey pigmented base of internal reflectance ``base_reflectance``."""
-    from nmmm.appearance.brdf import ClearCoat, PaintBRDF
-    from nmmm.appearance.flakes import FlakeList, aluminium_flakes
-    from nmmm.microstructure import flake_deposit
-
-    dep = flake_deposit(box_nm=(450e3, 450e3, 20e3), fraction=fraction, tilt_std_deg=tilt_std_deg, seed=seed)
-    flakes = FlakeList.from_deposit(dep, aluminium_flakes(), n_binder=1.5, coat_thickness_nm=coat_thickness_nm)
-    paint = PaintBRDF(ClearCoat(1.5, 0.0), base_reflectance, flakes.to_flake_layer(), name="grey metallic paint")
-    return paint, flakes
 
 
 def _hematite_paint(w):
@@ -42,8 +30,8 @@ def _hematite_paint(w):
     pseudo-cube diagonal, 7 % in the epoxy binder, 20 µm over a white substrate, base
     from nmmm.layers (Mie + Kubelka–Munk), epoxy clear coat."""
     from nmmm.appearance.brdf import opaque_paint_from_film
+    from nmmm.demo.hematite import epoxy_binder, hematite
     from nmmm.layers.distributions import equivalent_sphere_diameter, lognormal
-    from nmmm.layers.examples import epoxy_binder, hematite
     from nmmm.layers.paint import PaintFilm
 
     d = equivalent_sphere_diameter("cube", "volume", body_diagonal_nm=250.0)

@@ -1,13 +1,12 @@
-"""``nmmm demo``: the seed paper's worked examples, from the shipped recipes and the
-packages' demo hooks, into one self-contained HTML report.
+"""``nmmm demo``: the seed paper's worked examples, from the shipped recipes and the demo
+hooks of :mod:`nmmm.demo`, into one self-contained HTML report.
 
-- :data:`RECIPE_SECTIONS` — the shipped recipes run (with the hematite 5/7/10 % and
-  grain-size series as serial sweeps of the same recipe).
-- :data:`HOOKS` — ``(title, "module:function")`` of the packages' demo hooks
-  (``demo(output_dir) -> {"title", "figures", "tables", "text"}``); a hook that draws
-  progress bars takes ``progress: bool = True``, and gets the demo's flag.
-- :func:`run_demo` — runs every section, each guarded: a failing section becomes an error
-  box in the report and the others go on. Returns ``(report_path, failed_titles)``.
+- :func:`run_sections` — runs every section of :mod:`nmmm.demo.sections`, each guarded: a failing
+  section becomes an error box in the report and the others go on. Returns a :class:`DemoRun`
+  (report path, one :class:`SectionFailure` per failed section, skipped titles).
+- :func:`run_demo` — the same, returning ``(report_path, failed_titles, skipped_titles)``.
+- :func:`failure_hint` — what to install when an exception says a package or system library is
+  missing (``pip install h5py``, ``apt-get install libllvm19``, ``apt-get install chromium``).
 
 A hook whose module does not exist (a package not yet written) is listed as "not
 available" and does not count as a failure; any other exception does.
@@ -17,34 +16,87 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import re
 import time
 import traceback
 import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from nmmm.demo import sections
 from nmmm.recipes.report import error_section, hook_section, result_section, write_report
 
-__all__ = ["run_demo", "RECIPE_SECTIONS", "HOOKS", "HEMATITE_FRACTIONS", "HEMATITE_DIAGONALS_NM"]
+__all__ = ["run_demo", "run_sections", "DemoRun", "SectionFailure", "failure_hint"]
 
-RECIPE_SECTIONS = ("gold_ruby_glass", "hematite_paint", "substitution", "grey_metallic", "interference_pigment",
-                   "hematite_coating_fft")
-#: the substitution view of the demo: (recipe A, recipe B) compared by ``nmmm compare``
-SUBSTITUTION = ("hematite_paint", "hematite_paint_ethylcellulose")
-HEMATITE_FRACTIONS = (0.05, 0.07, 0.10)
-HEMATITE_DIAGONALS_NM = (100.0, 150.0, 250.0, 400.0, 600.0, 1000.0)
 
-HOOKS = (
-    ("Compounds of the seed paper (nmmm.materials)", "nmmm.materials.examples:demo"),
-    ("Gold-ruby glass in depth (nmmm.ema)", "nmmm.ema.examples:gold_ruby_demo"),
-    ("Hematite paint in depth (nmmm.layers)", "nmmm.layers.examples:hematite_demo"),
-    ("Interference pigments in depth (nmmm.layers)", "nmmm.layers.interference:demo"),
-    ("Microstructures (nmmm.microstructure)", "nmmm.microstructure.examples:demo"),
-    ("FFT homogenization (nmmm.homogenize)", "nmmm.homogenize.examples:demo"),
-    ("Ellipsometry (nmmm.ellipsometry)", "nmmm.ellipsometry.examples:demo"),
-    ("BRDFs and multi-angle colour (nmmm.appearance)", "nmmm.appearance.examples:demo"),
-    ("Rendering (nmmm.appearance.render)", "nmmm.appearance.render.examples:demo"),
-    ("2AFC validation (nmmm.experiment)", "nmmm.experiment.examples:demo"),
-)
+@dataclass(frozen=True)
+class SectionFailure:
+    """One failed section: its title, the exception's last line and what to do about it."""
+
+    title: str
+    target: str
+    error: str
+    hint: str = ""
+
+
+@dataclass(frozen=True)
+class DemoRun:
+    """The outcome of :func:`run_sections`."""
+
+    report: Path
+    failures: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
+
+    @property
+    def failed(self) -> list[str]:
+        """Titles of the failed sections."""
+        return [f.title for f in self.failures]
+
+
+#: import name -> distribution to ``pip install`` where they differ
+PIP_NAMES = {
+    "PIL": "pillow", "skimage": "scikit-image", "yaml": "pyyaml", "colour": "colour-science",
+    "OpenEXR": "openexr", "Imath": "openexr", "sklearn": "scikit-learn", "drjit": "mitsuba",
+    "distributed": "'dask[distributed]'", "multipart": "python-multipart", "tomli_w": "tomli-w",
+}
+LIBLLVM_HINT = "apt-get install libllvm19"
+CHROMIUM_HINT = "apt-get install chromium"
+_NO_MODULE = re.compile(r"No module named '([\w.]+)'")
+
+
+def _chain(exc: BaseException):
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        yield exc
+        exc = exc.__cause__ or exc.__context__
+
+
+def failure_hint(exc: BaseException) -> str:
+    """The install command for a missing optional package or system library named by ``exc``
+    (or any exception it was raised from); "" when it names none."""
+    chain = list(_chain(exc))
+    for e in chain:  # a missing Python package: the first one named
+        name = getattr(e, "name", None) if isinstance(e, ImportError) else None
+        if not name:
+            m = _NO_MODULE.search(str(e))
+            name = m.group(1) if m else None
+        if name:
+            top = name.split(".")[0]
+            if top != "nmmm":
+                return f"pip install {PIP_NAMES.get(top, top)}"
+    text = " ".join(f"{type(e).__name__}: {e}" for e in chain)
+    if re.search(r"libLLVM|LLVM|Dr\.?Jit|drjit|Mitsuba", text):
+        return LIBLLVM_HINT
+    if re.search(r"chromium|chrome", text, re.IGNORECASE):
+        return CHROMIUM_HINT
+    return ""
+
+
+def _last_line(exc: BaseException) -> str:
+    lines = traceback.format_exception_only(type(exc), exc)
+    last = "".join(lines).strip().splitlines()
+    return last[-1] if last else type(exc).__name__
 
 
 def _recipe_section(name, out, progress):
@@ -54,7 +106,7 @@ def _recipe_section(name, out, progress):
     if name == "substitution":
         from nmmm.recipes.compare import compare_recipes
 
-        a, b = SUBSTITUTION
+        a, b = sections.SUBSTITUTION
         r = compare_recipes(example_path(a), example_path(b), out / "substitution", illuminants=["D65", "A"],
                             progress=progress)
         sec = r["section"]
@@ -74,9 +126,10 @@ def _hematite_series(path, out, sec, progress):
     """The 5/7/10 % and grain-size series: serial sweeps of the shipped recipe."""
     from nmmm.recipes.sweep import sweep
 
-    fr = sweep(path, [("pigment.fraction", list(HEMATITE_FRACTIONS)), ("pigment.dependent_scattering", [False, True])],
+    fractions, diagonals = sections.HEMATITE_FRACTIONS, sections.HEMATITE_DIAGONALS_NM
+    fr = sweep(path, [("pigment.fraction", list(fractions)), ("pigment.dependent_scattering", [False, True])],
                out / "fraction_series", serial=True, progress=progress)
-    gs = sweep(path, [("pigment.body_diagonal_nm", list(HEMATITE_DIAGONALS_NM))], out / "grain_size_series",
+    gs = sweep(path, [("pigment.body_diagonal_nm", list(diagonals))], out / "grain_size_series",
                serial=True, progress=progress)
     cols = lambda df, p, head: [{head: r[f"param:{p}"], "L": r["L_D65"], "a": r["a_D65"], "b": r["b_D65"]}
                                 for _, r in df.iterrows()]
@@ -90,9 +143,9 @@ def _hematite_series(path, out, sec, progress):
     sec["text"].append("In an opaque film with independent scattering the colour hardly depends on the fraction "
                        "(K/S does not); packing (Percus-Yevick dependent scattering) is what separates 5, 7 and 10 %.")
     sec["text"].append(f"Series (serial sweeps of this recipe): 5/7/10 % by volume, and body diagonals "
-                       f"{', '.join(f'{d:g}' for d in HEMATITE_DIAGONALS_NM)} nm at 7 %. Beyond the lightest size "
-                       f"(L* = {max(L):.1f} at {HEMATITE_DIAGONALS_NM[L.index(max(L))]:g} nm) bigger grains look {trend}: "
-                       f"L* = {L[-1]:.1f} at {HEMATITE_DIAGONALS_NM[-1]:g} nm.")
+                       f"{', '.join(f'{d:g}' for d in diagonals)} nm at 7 %. Beyond the lightest size "
+                       f"(L* = {max(L):.1f} at {diagonals[L.index(max(L))]:g} nm) bigger grains look {trend}: "
+                       f"L* = {L[-1]:.1f} at {diagonals[-1]:g} nm.")
 
 
 def _accepts_progress(fn) -> bool:
@@ -120,20 +173,20 @@ def _hook_section(title, target, out, progress=True):
     return sec
 
 
-def run_demo(output_dir="nmmm-demo", quick: bool = False, only=None, progress: bool = True):
-    """Run the demo into ``output_dir``; returns ``(report_path, failed, skipped)``.
+def run_sections(output_dir="nmmm-demo", quick: bool = False, only=None, progress: bool = True) -> DemoRun:
+    """Run the demo into ``output_dir``; returns a :class:`DemoRun`.
 
-    ``quick`` runs the shipped recipes only (no package hooks); ``only`` restricts to
+    ``quick`` runs the shipped recipes only (no demo hooks); ``only`` restricts to
     sections whose recipe name or hook target contains one of the given strings.
     """
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
-    jobs = [(name, "recipe", name) for name in RECIPE_SECTIONS]
+    jobs = [(name, "recipe", name) for name in sections.RECIPE_SECTIONS]
     if not quick:
-        jobs += [(title, "hook", target) for title, target in HOOKS]
+        jobs += [(title, "hook", target) for title, target in sections.HOOKS]
     if only:
         jobs = [j for j in jobs if any(o in j[2] or o.lower() in j[0].lower() for o in only)]
-    sections, failed, skipped = [], [], []
+    secs, failures, skipped = [], [], []
     for title, kind, target in jobs:
         t0 = time.perf_counter()
         if progress:
@@ -152,12 +205,22 @@ def run_demo(output_dir="nmmm-demo", quick: bool = False, only=None, progress: b
             tb = traceback.format_exc(limit=6)
             sec = error_section(f"{title} ({target})", f"{type(exc).__name__}: {exc}\n\n{tb}",
                                 time.perf_counter() - t0)
-            failed.append(title)
-        sections.append(sec)
+            failures.append(SectionFailure(title, target, _last_line(exc), failure_hint(exc)))
+        secs.append(sec)
     intro = ("The worked examples of the seed paper, each computed from its compounds' optical constants: "
              "first from the TOML recipes shipped with nmmm (nmmm run), then the packages' own worked examples.")
     if skipped:
         intro += " Not available in this installation: " + ", ".join(skipped) + "."
-    report = write_report(sections, out / "report.html", title="nmmm demo — the seed paper's worked examples",
+    report = write_report(secs, out / "report.html", title="nmmm demo — the seed paper's worked examples",
                           intro=intro)
-    return report, failed, skipped
+    return DemoRun(Path(report), failures, skipped)
+
+
+def run_demo(output_dir="nmmm-demo", quick: bool = False, only=None, progress: bool = True):
+    """Run the demo into ``output_dir``; returns ``(report_path, failed, skipped)`` (lists of titles).
+
+    ``quick`` runs the shipped recipes only (no demo hooks); ``only`` restricts to
+    sections whose recipe name or hook target contains one of the given strings.
+    """
+    r = run_sections(output_dir, quick=quick, only=only, progress=progress)
+    return r.report, r.failed, r.skipped

@@ -1,7 +1,7 @@
-"""Worked example of FFT homogenization: the seed's hematite coating (demo hook for the lead).
+"""Worked example of FFT homogenization: the seed's hematite coating (demo hook).
 
 - :func:`epoxy_resin` — the binder: SU-8-type epoxy, Cauchy n with a weak red absorption (same
-  model and coefficients as the layers package's hematite example).
+  model and coefficients as :func:`nmmm.demo.hematite.epoxy_binder`).
 - :func:`hematite_mean` — α-Fe2O3, the uniaxial mean of Querry's ordinary/extraordinary indices.
 - :func:`hematite_coating` — hard-core pseudo-cubes (250 nm diagonal) at 5, 7, 10 % in epoxy,
   homogenized by FFT over the visible, against Maxwell Garnett, Bruggeman and the

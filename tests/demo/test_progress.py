@@ -3,7 +3,8 @@
 import pytest
 from click.testing import CliRunner
 
-from nmmm.recipes import demo as demo_mod
+from nmmm.demo import runner as demo_mod
+from nmmm.demo import sections
 
 
 def _hooks(monkeypatch):
@@ -23,9 +24,9 @@ def _hooks(monkeypatch):
 
     monkeypatch.setattr(demo_mod, "_test_with_bar", with_bar, raising=False)
     monkeypatch.setattr(demo_mod, "_test_without_bar", without_bar, raising=False)
-    monkeypatch.setattr(demo_mod, "RECIPE_SECTIONS", ())
-    monkeypatch.setattr(demo_mod, "HOOKS", (("With a bar", "nmmm.recipes.demo:_test_with_bar"),
-                                            ("Without a bar", "nmmm.recipes.demo:_test_without_bar")))
+    monkeypatch.setattr(sections, "RECIPE_SECTIONS", ())
+    monkeypatch.setattr(sections, "HOOKS", (("With a bar", "nmmm.demo.runner:_test_with_bar"),
+                                            ("Without a bar", "nmmm.demo.runner:_test_without_bar")))
     return calls
 
 
@@ -40,7 +41,7 @@ def test_demo_passes_its_progress_flag_to_hooks_that_take_it(tmp_path, monkeypat
 
 
 def test_cli_no_progress_hides_hook_bars(tmp_path, monkeypatch):
-    from nmmm.recipes import cli
+    from nmmm.demo import cli
 
     calls = _hooks(monkeypatch)
     r = CliRunner().invoke(cli.demo, ["-o", str(tmp_path), "--no-progress"])
@@ -50,7 +51,7 @@ def test_cli_no_progress_hides_hook_bars(tmp_path, monkeypatch):
 
 
 def test_package_hooks_that_draw_bars_take_progress():
-    from nmmm.layers.examples import hematite_demo
+    from nmmm.demo.hematite import hematite_demo
 
     assert demo_mod._accepts_progress(hematite_demo)
     assert not demo_mod._accepts_progress(lambda output_dir: None)

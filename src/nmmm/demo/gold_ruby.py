@@ -1,12 +1,15 @@
 """Worked example of the seed paper: gold-ruby glass (and gold rods), as a demo hook.
 
-- :func:`plate_transmittance` — transmittance of a plate in air at normal incidence:
-  Beer–Lambert absorption α = 4πk/λ and the Fresnel losses of its two faces.
 - :func:`gold_ruby_glass` — the composite Material (Maxwell Garnett, p = 0.0005 gold spheres
   in silica, eq. 2).
 - :func:`gold_ruby_demo` — writes the figures (n, k against silica — the seed's Figure 1;
   transmission of plates; colour swatches under D65 and A; gold rods; causality) and CSV
   tables into a folder, returns ``{"title", "figures", "tables", "text"}``.
+- :func:`reads_red_purple`, :func:`thickness_ranges` — the colour criterion and the thickness
+  runs where it holds.
+
+Plates: :func:`nmmm.layers.thick_plate.plate_transmittance` (Beer–Lambert absorption
+α = 4πk/λ and the Fresnel losses of the two faces, re-exported here).
 
 Materials: silica main/SiO2/Malitson (210–6700 nm) and gold main/Au/Johnson (188–1937 nm)
 from the refractiveindex.info database (:func:`nmmm.materials.get`).
@@ -30,7 +33,7 @@ import numpy as np
 
 from nmmm.ema.mixtures import Inclusion, mix
 from nmmm.ema.shapes import Shape
-from nmmm.spectra import as_wavelength_nm, check_nk, check_positive
+from nmmm.layers.thick_plate import plate_transmittance
 
 GOLD_KEY = "main/Au/Johnson"
 SILICA_KEY = "main/SiO2/Malitson"
@@ -41,26 +44,6 @@ GOLD_FRACTION = 0.0005
 RED_PURPLE_HUE_DEG = (330.0, 30.0)
 RED_PURPLE_MIN_CHROMA = 20.0
 RED_PURPLE_MIN_LIGHTNESS = 20.0
-
-
-def plate_transmittance(nk, wavelength_nm, thickness_nm, multiple_reflections: bool = True) -> np.ndarray:
-    """Transmittance of a plate of index ``nk`` in air at normal incidence.
-
-    ``T = (1 − R)² e^{−α d} / (1 − R² e^{−2 α d})`` with ``R = |(N − 1)/(N + 1)|²`` and
-    ``α = 4π k / λ`` (incoherent multiple reflections; with ``multiple_reflections=False``
-    the plain Beer–Lambert law times the two faces' Fresnel losses, (1 − R)² e^{−α d}).
-    ``nk`` (..., N) on ``wavelength_nm`` (N,); ``thickness_nm`` broadcasts against the
-    leading axes (e.g. shape (M, 1) for M thicknesses).
-    """
-    N = check_nk(nk, "nk")
-    w = as_wavelength_nm(wavelength_nm)
-    d = check_positive(thickness_nm, "thickness_nm")
-    R = np.abs((N - 1) / (N + 1)) ** 2
-    att = np.exp(-4 * np.pi * N.imag / w * d)
-    T = (1 - R) ** 2 * att
-    if multiple_reflections:
-        T = T / (1 - R**2 * att**2)
-    return T
 
 
 def gold_ruby_glass(fraction: float = GOLD_FRACTION, shape: Shape | None = None, radius_nm=None, method="maxwell_garnett"):

@@ -7,7 +7,7 @@ import pytest
 def test_demo_writes_figures_and_respects_bounds(tmp_path):
     from pathlib import Path
 
-    from nmmm.homogenize.examples import demo
+    from nmmm.demo.homogenization import demo
 
     out = demo(tmp_path)
     assert set(out) >= {"title", "figures", "tables", "text"}

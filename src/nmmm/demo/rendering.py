@@ -1,6 +1,6 @@
 """Worked example: the seed's grey metallic plate, mono and stereo, spectral EXR + sRGB PNG.
 
-- :func:`demo` — the lead's demo hook (``nmmm demo``): renders the 15 cm × 10 cm grey
+- :func:`demo` — the demo hook (``nmmm demo``): renders the 15 cm × 10 cm grey
   metallic plate (332 × 240 flake unit cells) under D65 at reading distance, and its
   stereo pair, to PNG and spectral EXR, plus a figure of the glints seen by each eye.
 """

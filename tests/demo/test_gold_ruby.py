@@ -1,19 +1,9 @@
-"""The gold-ruby demo hook and its plate model."""
+"""The gold-ruby demo hook and its colour criterion (the plate model: tests/layers/test_thick_plate.py)."""
 
 import numpy as np
 import pytest
 
-from nmmm.ema.examples import gold_ruby_demo, plate_transmittance, reads_red_purple, thickness_ranges
-
-
-def test_plate_transmittance_analytic():
-    w = np.array([500.0, 600.0])
-    # lossless n = 1.5: T = (1-R)^2/(1-R^2) = 2n/(n^2+1) (Born & Wolf, incoherent slab)
-    T = plate_transmittance(np.array([1.5, 1.5]), w, 1e6)
-    np.testing.assert_allclose(T, 2 * 1.5 / (1.5**2 + 1), rtol=1e-12)
-    T = plate_transmittance(np.array([1.5 + 1e-5j] * 2), w, np.array([[1e6], [2e6]]), multiple_reflections=False)
-    R = (0.5 / 2.5) ** 2
-    np.testing.assert_allclose(T, (1 - R) ** 2 * np.exp(-4 * np.pi * 1e-5 / w * np.array([[1e6], [2e6]])), rtol=1e-6)
+from nmmm.demo.gold_ruby import gold_ruby_demo, reads_red_purple, thickness_ranges
 
 
 def test_red_purple_criterion_and_ranges():
