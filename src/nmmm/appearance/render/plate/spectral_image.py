@@ -1,0 +1,128 @@
+"""The rendered image: :class:`SpectralImage` — spectral radiance (H, W, L) and its colour
+(XYZ, sRGB with exposure, Display P3), PNG and spectral OpenEXR output.
+
+References
+----------
+- A. Fichet, R. Pacanowski, A. Wilkie, "An OpenEXR layout for spectral images", JCGT
+  10(3) (2021) — the EXR channel layout.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from nmmm.appearance.render.camera import PinholeCamera
+from nmmm.errors import InvalidInputError
+from nmmm.spectra import check_finite
+
+__all__ = ["SpectralImage"]
+
+
+@dataclass(frozen=True, repr=False)
+class SpectralImage:
+    """A rendered spectral radiance image.
+
+    ``radiance`` (H, W, L) float32 in the lights' units × sr⁻¹; ``on_plate`` (H, W) mask;
+    ``white_radiance`` (L,) radiance of a perfect white diffuser at the plate centre under
+    the same lights (sets the default exposure and the adopted white).
+    """
+
+    wavelength_nm: np.ndarray
+    radiance: np.ndarray
+    on_plate: np.ndarray
+    white_radiance: np.ndarray
+    camera: PinholeCamera | None = None
+    metadata: dict = field(default_factory=dict)
+
+    def __repr__(self):
+        h, w, L = self.radiance.shape
+        return f"<SpectralImage {w}x{h}, {L} wavelengths {self.wavelength_nm[0]:g}-{self.wavelength_nm[-1]:g} nm>"
+
+    def _weights(self):
+        from nmmm.colour import weighting_factors
+
+        # equal-energy weights: a flat spectrum of value 1 has Y = 100
+        return weighting_factors(self.wavelength_nm, illuminant=np.ones(self.wavelength_nm.size))
+
+    def to_xyz(self) -> np.ndarray:
+        """CIE 1931 XYZ (H, W, 3) of the radiance, scaled so a flat radiance of 1 has Y = 100."""
+        W = self._weights()
+        return (self.radiance.reshape(-1, self.radiance.shape[-1]) @ W.astype(np.float32)).reshape(
+            self.radiance.shape[:2] + (3,)).astype(float)
+
+    @property
+    def white_xyz(self) -> np.ndarray:
+        return self.white_radiance @ self._weights()
+
+    def exposure_scale(self, exposure: float = 1.0) -> float:
+        """Multiplier putting the white diffuser at Y = 100, times ``exposure``."""
+        yw = float(self.white_xyz[1])
+        if not yw > 0:
+            return float(exposure)
+        return 100.0 / yw * float(exposure)
+
+    def to_srgb(self, exposure: float = 1.0, clip: bool = True) -> np.ndarray:
+        """Encoded sRGB (H, W, 3) in [0, 1]: ``exposure`` = 1 maps a perfect white diffuser
+        under the same lights to display white (1, 1, 1); the lights' white is adapted to
+        D65 (CAT02) via :func:`nmmm.colour.xyz_to_srgb`."""
+        from nmmm.colour import xyz_to_srgb
+
+        e = float(check_finite(exposure, "exposure"))
+        if e <= 0:
+            raise InvalidInputError(f"exposure must be > 0, got {exposure!r}")
+        white = self.white_xyz
+        return xyz_to_srgb(self.to_xyz(), white_xyz=white if white[1] > 0 else None, clip=clip,
+                           exposure=self.exposure_scale(e))
+
+    def to_display_rgb(self, colourspace: str = "sRGB", exposure: float = 1.0, clip: bool = True) -> np.ndarray:
+        """Encoded RGB (H, W, 3) for a calibrated display: ``"sRGB"`` (IEC 61966-2-1) or
+        ``"Display P3"`` (P3 primaries, D65, sRGB transfer curve), via colour-science; the
+        lights' white is adapted to D65 (CAT02) and ``exposure`` = 1 maps a white diffuser
+        to display white."""
+        import colour
+
+        if colourspace == "sRGB":
+            return self.to_srgb(exposure, clip)
+        if colourspace not in ("Display P3",):
+            raise InvalidInputError(f"colourspace must be 'sRGB' or 'Display P3', got {colourspace!r}")
+        e = float(check_finite(exposure, "exposure"))
+        if e <= 0:
+            raise InvalidInputError(f"exposure must be > 0, got {exposure!r}")
+        white = self.white_xyz
+        xyz = self.to_xyz() / 100.0 * self.exposure_scale(e)
+        xy_w = colour.XYZ_to_xy(white / white[1]) if white[1] > 0 else colour.CCS_ILLUMINANTS[
+            "CIE 1931 2 Degree Standard Observer"]["D65"]
+        rgb = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES[colourspace], illuminant=xy_w,
+                                chromatic_adaptation_transform="CAT02", apply_cctf_encoding=True)
+        return np.clip(rgb, 0.0, 1.0) if clip else rgb
+
+    def linear_srgb(self) -> np.ndarray:
+        """Linear sRGB (H, W, 3) of XYZ/100 (no exposure, no encoding) — the EXR preview."""
+        import colour
+
+        return colour.XYZ_to_sRGB(self.to_xyz() / 100.0, apply_cctf_encoding=False)
+
+    def write_png(self, path, exposure: float = 1.0, colourspace: str = "sRGB"):
+        """8-bit PNG for a display in ``colourspace`` ("sRGB" or "Display P3"; exposure as
+        in :meth:`to_srgb`)."""
+        from pathlib import Path
+
+        from PIL import Image
+
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(np.round(self.to_display_rgb(colourspace, exposure) * 255).astype(np.uint8)).save(p)
+        return p
+
+    def write_exr(self, path, half: bool = False):
+        """Spectral OpenEXR (Fichet et al. 2021 layout) with an RGB preview."""
+        from nmmm.appearance.render.exr import write_spectral_exr
+
+        attrs = {"nmmm": "nmmm.appearance.render"}
+        for k, v in self.metadata.items():
+            if isinstance(v, (str, int, float)):
+                attrs[f"nmmm.{k}"] = v
+        return write_spectral_exr(path, self.wavelength_nm, self.radiance, rgb=self.linear_srgb(),
+                                  attributes=attrs, half=half)

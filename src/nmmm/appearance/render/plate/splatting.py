@@ -1,0 +1,60 @@
+"""Splatting of the glint records onto the image (Numba): records sorted by pixel, one pixel
+group per task, each record's spectrum the coat transmission in and out, the flake
+reflectance at its local angle, the mean-field attenuation by the flakes above it and the
+light's spectrum (``_glint_splat``).
+"""
+
+from __future__ import annotations
+
+import math
+
+from nmmm.errors import InvalidInputError
+
+try:  # pragma: no cover - numba is a dependency, but keep a NumPy path
+    import numba as _nb
+except ImportError:  # pragma: no cover
+    _nb = None
+
+
+def _needs_numba(*args):  # pragma: no cover - only without numba
+    raise InvalidInputError("discrete flakes (glints) need numba")
+
+
+if _nb is not None:
+    @_nb.njit(parallel=True, cache=True, fastmath=True)
+    def _glint_splat(img, gstart, rec_pix, rec_w, rec_th, rec_li, Tc, Rf, step, tau_e, const_tau, espec):
+        """Add the glint spectra to the image; records sorted by pixel, one pixel group
+        per task (no write conflicts, deterministic order)."""
+        L = img.shape[1]
+        nt = Tc.shape[0]
+        ng = gstart.size - 1
+        for gi in _nb.prange(ng):
+            for r in range(gstart[gi], gstart[gi + 1]):
+                p = rec_pix[r]
+                x0 = rec_th[r, 0] / step
+                x1 = rec_th[r, 1] / step
+                x2 = rec_th[r, 2] / step
+                a0 = min(int(x0), nt - 2)
+                a1 = min(int(x1), nt - 2)
+                a2 = min(int(x2), nt - 2)
+                f0 = min(x0 - a0, 1.0)
+                f1 = min(x1 - a1, 1.0)
+                f2 = min(x2 - a2, 1.0)
+                wgt = rec_w[r]
+                sz = rec_th[r, 3]
+                li = rec_li[r]
+                if const_tau:
+                    wgt *= math.exp(-tau_e[0] * sz)
+                    for l in range(L):
+                        ti = Tc[a0, l] * (1 - f0) + Tc[a0 + 1, l] * f0
+                        to = Tc[a1, l] * (1 - f1) + Tc[a1 + 1, l] * f1
+                        rf = Rf[a2, l] * (1 - f2) + Rf[a2 + 1, l] * f2
+                        img[p, l] += wgt * ti * to * rf * espec[li, l]
+                else:
+                    for l in range(L):
+                        ti = Tc[a0, l] * (1 - f0) + Tc[a0 + 1, l] * f0
+                        to = Tc[a1, l] * (1 - f1) + Tc[a1 + 1, l] * f1
+                        rf = Rf[a2, l] * (1 - f2) + Rf[a2 + 1, l] * f2
+                        img[p, l] += wgt * ti * to * rf * math.exp(-tau_e[l] * sz) * espec[li, l]
+else:  # pragma: no cover
+    _glint_splat = _needs_numba
