@@ -83,5 +83,5 @@ def grey_metallic_paint() -> PaintBRDF:
     volume fraction of 20 µm × 300 nm flakes gives in the 20 µm layer), under a smooth
     clear coat (n = 1.5) over a grey base (internal reflectance 0.35). For the version
     built from an actual flake deposit see
-    :func:`nmmm.appearance.examples.grey_metallic_from_deposit`."""
+    :func:`nmmm.appearance.deposit.grey_metallic_from_deposit`."""
     return metallic_paint(optical_depth=0.5, tilt=6.0, body_reflectance=0.35, name="grey metallic paint")
