@@ -15,6 +15,18 @@ import os
 import click
 
 
+def _db_folder(db_path) -> None:
+    """Create the folder of the response database (``--db out/responses.sqlite``)."""
+    from pathlib import Path
+
+    folder = Path(db_path).parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise click.BadParameter(f"cannot create the folder {str(folder)!r} of the response database: "
+                                 f"{exc.strerror or exc}; give a writable --db path", param_hint="'--db'") from None
+
+
 @click.group(name="experiment")
 def experiment():
     """The 2AFC visual validation experiment: which image is the photograph of the real plate?"""
@@ -39,6 +51,7 @@ def serve(pairs_toml, db_path, host, port, admin_token, log_level, check):
     """Serve the experiment described by PAIRS_TOML; every response is committed to --db."""
     from nmmm.experiment.app import serve as run
 
+    _db_folder(db_path)
     if check:
         from nmmm.experiment.app import create_app
         from nmmm.experiment.pairs import load_pairs
