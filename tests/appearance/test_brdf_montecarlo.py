@@ -4,7 +4,7 @@
 interreflections as a smooth diffuse term (``"multiple"``) whose amount for absorbing
 paints comes from an angle-averaged bounce model; the white-furnace test only checks
 it for lossless paints. Here an independent photon tracer of the same physical model
-(as documented in brdf.py / flakes.py) gives the reference:
+(as documented in nmmm.appearance.brdf / flakes.py) gives the reference:
 
     air | smooth clear coat, n = 1.5 | flake layer of optical depth τ | Lambertian base ρ
 
@@ -48,7 +48,7 @@ coat; λ = 550 nm, MC standard error ≈ 0.0008; 450 and 650 nm alike):
 
 The single-scattering terms (one flake; base with its coat interreflections) always
 agreed. The ``"multiple"`` term was too large (×1.25 at τ = 1, ×2.05 at τ = 2): the old
-bounce operator of ``_Tables._ms_factor`` kept only single flake scattering per pass
+bounce operator of ``multiple_scattering_factor`` (then ``_Tables._ms_factor``) kept only single flake scattering per pass
 and lost 20–40 % of the lossless light per bounce, which weighted ms/ms⁰ towards short,
 little-absorbed paths. It is now adding–doubling of the azimuth-averaged flake layer
 (exactly conservative when lossless); the albedo agrees to ≤ 0.004 (asserted:
@@ -58,7 +58,7 @@ azimuth dependence. Bin averages at θi = 45° (θo 60–80°, |φo| 0–60° / 
 120–180°, 1/sr): τ = 1 MC 0.163 / 0.050 / 0.024, model 0.148 / 0.055 / 0.035 (−9 %,
 +9 %, +46 %); τ = 2 MC 0.198 / 0.057 / 0.023, model 0.172 / 0.065 / 0.043 (−13 %,
 +14 %, +86 %); bins within 20° of the normal agree to < 10 %. That comparison is
-``xfail(strict=True)`` with these numbers (brdf.py, Notes).
+``xfail(strict=True)`` with these numbers (nmmm.appearance.brdf, Notes).
 """
 
 import numpy as np
@@ -319,7 +319,7 @@ def test_total_albedo_matches_mc(traces, tau):
     "bin-averaged BRDF at θi = 45°: the model's multiple-scattering lobe has no azimuth dependence while the "
     "traced one is peaked towards the specular side: θo 60–80°, |φo| 0–60° / 120–180°: τ = 1 model 0.148 / "
     "0.035 vs MC 0.163 / 0.024 1/sr (−9 % / +46 %); τ = 2 model 0.172 / 0.043 vs MC 0.198 / 0.023 "
-    "(−13 % / +86 %); the albedo is right (test_total_albedo_matches_mc); see brdf.py Notes"))
+    "(−13 % / +86 %); the albedo is right (test_total_albedo_matches_mc); see the nmmm.appearance.brdf Notes"))
 @pytest.mark.parametrize("tau", [1.0, 2.0])
 def test_binned_brdf_matches_mc(traces, tau):
     r = traces[tau, 45.0]
