@@ -49,8 +49,7 @@ coat; λ = 550 nm, MC standard error ≈ 0.0008; 450 and 650 nm alike):
 The single-scattering terms (one flake; base with its coat interreflections) always
 agreed. The ``"multiple"`` term was too large (×1.25 at τ = 1, ×2.05 at τ = 2): the old
 bounce operator of ``_Tables._ms_factor`` (now ``multiple_scattering_factor``) kept only single flake
-scattering per pass
-and lost 20–40 % of the lossless light per bounce, which weighted ms/ms⁰ towards short,
+scattering per pass and lost 20–40 % of the lossless light per bounce, which weighted ms/ms⁰ towards short,
 little-absorbed paths. It is now adding–doubling of the azimuth-averaged flake layer
 (exactly conservative when lossless); the albedo agrees to ≤ 0.004 (asserted:
 4 SE + 0.01). Still off: the *shape* of the multiply scattered light. The tracer's is
