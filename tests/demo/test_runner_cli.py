@@ -99,3 +99,14 @@ def test_failure_hint_names_the_install_command():
         assert failure_hint(exc) == "apt-get install libllvm19"
     assert failure_hint(ValueError("a bad value")) == ""
     assert failure_hint(ModuleNotFoundError("No module named 'nmmm.nothing'", name="nmmm.nothing")) == ""
+
+
+def test_scale_tours_stay_under_their_scale_commands():
+    """``nmmm ema gold-ruby`` and the other tours live in nmmm.demo.cli but keep their old command lines."""
+    from nmmm.cli import cli as top
+
+    for group, sub in (("ema", "gold-ruby"), ("layers", "hematite"), ("homogenize", "demo"), ("appearance", "demo")):
+        r = CliRunner().invoke(top, [group, "--help"])
+        assert r.exit_code == 0 and f"  {sub} " in r.output, (group, r.output)
+        r = CliRunner().invoke(top, [group, sub, "--help"])
+        assert r.exit_code == 0 and "Usage:" in r.output, (group, sub, r.output)
