@@ -3,6 +3,9 @@ by Mitsuba 3 (pip install 'nmmm[mitsuba]'; a system libLLVM >= 17, e.g. apt-get 
 libllvm19), written as spectral EXR + sRGB PNG.
 
     python examples/render_object.py [OUTDIR]
+
+Without Mitsuba 3 or a recent enough libLLVM it prints one line saying what to install and
+exits with status 1.
 """
 
 import sys
@@ -10,7 +13,13 @@ from pathlib import Path
 
 from nmmm.appearance.brdf import grey_metallic_paint
 from nmmm.appearance.render import DirectionalLight, UniformEnvironment
+from nmmm.appearance.render.mitsuba_paint import MitsubaUnavailableError, require_mitsuba
 from nmmm.appearance.render.mitsuba_scene import render_object
+
+try:
+    require_mitsuba("llvm_ad_spectral")
+except MitsubaUnavailableError as exc:
+    sys.exit(f"render_object: {exc}")
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "render_out")
 paint = grey_metallic_paint()

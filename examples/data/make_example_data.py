@@ -112,10 +112,7 @@ def responses(out: Path, pairs_toml: Path) -> Path:
     """20 simulated observers (not data) answering the experiment of ``pairs_toml``."""
     from nmmm.experiment.pairs import load_pairs
 
-    try:
-        from nmmm.experiment.simulation import simulate_responses
-    except ImportError:  # nmmm before the demo code moved out of the scale packages
-        from nmmm.experiment.examples import simulate_responses
+    from nmmm.experiment.simulation import simulate_responses
 
     db = out / "responses.sqlite"
     for suffix in ("", "-wal", "-shm"):
