@@ -49,3 +49,51 @@ def test_exif_orientation_is_applied(tmp_path):
     im.save(tmp_path / "rot.jpg", exif=exif.tobytes())
     assert check_image(tmp_path / "rot.jpg") == (20, 40)
     assert _png(prepare_image(tmp_path / "rot.jpg", (10, 20))).size == (10, 20)
+
+
+def test_restart_reuses_the_content_addressed_cache(tmp_path):
+    from experiment_helpers import make_pairs, write_image
+
+    from nmmm.experiment.pairs import load_pairs
+    from nmmm.experiment.stimuli import StimulusStore
+
+    toml = make_pairs(tmp_path, n_pairs=3)
+    ps = load_pairs(toml)
+    first = StimulusStore(ps, tmp_path / "cache")
+    assert first.counts == {"prepared": 6, "reused": 0}
+    again = StimulusStore(ps, tmp_path / "cache")          # a restarted server
+    assert again.counts == {"prepared": 0, "reused": 6}
+    for pair in ps.pairs:
+        for role in ("rendered", "photo"):
+            assert again.raw(pair.pair_id, role) == first.raw(pair.pair_id, role)
+            assert again.raw(pair.pair_id, role) == prepare_pixels_bytes(pair.image(role), first.size(pair.pair_id))
+    # a damaged entry is prepared again, never served
+    victim = sorted((tmp_path / "cache").glob("*.rgb"))[0]
+    data = bytearray(victim.read_bytes())
+    data[0] ^= 0xFF
+    victim.write_bytes(bytes(data))
+    assert StimulusStore(ps, tmp_path / "cache").counts == {"prepared": 1, "reused": 5}
+    # a changed image is a new key: the old pixels are not reused for it
+    write_image(ps.pairs[0].rendered, size=(48, 32), colour=(10, 200, 10), seed=99)
+    changed = StimulusStore(ps, tmp_path / "cache")
+    assert changed.counts == {"prepared": 1, "reused": 5}
+    assert changed.raw(ps.pairs[0].pair_id, "rendered") != first.raw(ps.pairs[0].pair_id, "rendered")
+
+
+def prepare_pixels_bytes(path, size):
+    from nmmm.experiment.stimuli import prepare_pixels
+
+    return prepare_pixels(path, size).tobytes()
+
+
+def test_served_encodings_have_content_independent_lengths(tmp_path):
+    from nmmm.experiment.stimuli import bmp_length, encode_bmp
+
+    rng = np.random.default_rng(1)
+    for w, h in [(1, 1), (5, 7), (48, 32), (33, 2)]:
+        noisy = rng.integers(0, 256, (h, w, 3), dtype=np.uint8)
+        flat = np.zeros((h, w, 3), np.uint8)
+        a, b = encode_bmp(noisy), encode_bmp(flat)
+        assert len(a) == len(b) == bmp_length(w, h) and a[:54] == b[:54]
+        im = Image.open(io.BytesIO(a))
+        assert im.format == "BMP" and im.size == (w, h) and np.array_equal(np.asarray(im), noisy)

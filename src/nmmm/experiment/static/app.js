@@ -32,7 +32,7 @@ function uuid4() {
 
 // fetch JSON; network failures and 5xx are retried (the server may be restarting)
 async function api(path, options = {}, { retry = true } = {}) {
-  let delay = 200;
+  let delay = 100;
   for (;;) {
     let resp;
     try {
@@ -53,7 +53,7 @@ async function api(path, options = {}, { retry = true } = {}) {
     }
     setStatus(why + " — retrying…");
     await sleep(delay);
-    delay = Math.min(delay * 2, 2000);
+    delay = Math.min(delay * 2, 1000);
   }
 }
 
