@@ -50,13 +50,13 @@ def experiment():
 def serve(pairs_toml, db_path, host, port, admin_token, log_level, check):
     """Serve the experiment described by PAIRS_TOML; every response is committed to --db."""
     from nmmm.experiment.app import serve as run
+    from nmmm.experiment.pairs import load_pairs
 
+    pairset = load_pairs(pairs_toml)   # a bad experiment is refused before anything is created
     _db_folder(db_path)
     if check:
         from nmmm.experiment.app import create_app
-        from nmmm.experiment.pairs import load_pairs
 
-        pairset = load_pairs(pairs_toml)
         app = create_app(pairset, db_path, admin_token=admin_token, progress=False)
         try:
             c = app.state.stimuli.counts
