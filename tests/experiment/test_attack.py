@@ -305,6 +305,20 @@ def test_participant_page_in_chromium_sees_nothing_but_pixels(attack_toml, tmp_p
                     return {trial: t.trial_index, left: l, right: r, width: t.width, height: t.height};
                 }"""))
                 expect(page.locator("#counter")).to_have_text(f"{i + 1} / {N_PAIRS * REPS}")
+                if i == 0:   # the canvases show exactly the served sRGB pixels (no colour management)
+                    same = page.evaluate("""async () => {
+                        const t = state.trial, n = 3 * t.width * t.height;
+                        const raw = new Uint8Array(await (await fetch(t.stimuli.url)).arrayBuffer());
+                        const canvases = [...document.querySelectorAll("#stage canvas")];
+                        return canvases.map((c, k) => {
+                            const px = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+                            for (let i = 0, j = 0; i < n; i += 3, j += 4)
+                                if (px[j] !== raw[k * n + i] || px[j + 1] !== raw[k * n + i + 1] ||
+                                    px[j + 2] !== raw[k * n + i + 2]) return false;
+                            return true;
+                        });
+                    }""")
+                    assert same == [True, True], same
                 page.keyboard.press("ArrowLeft" if i % 2 else "ArrowRight")
             expect(page.locator("#screen-done")).to_be_visible()
             bodies = [(r.url, r.status, r.all_headers(), len(r.body()), r.request.timing) for r in seen]
@@ -318,7 +332,7 @@ def test_participant_page_in_chromium_sees_nothing_but_pixels(attack_toml, tmp_p
         assert p["left"]["length"] == p["right"]["length"] == bmp_length(w, h)
         assert p["left"]["headers"] == p["right"]["headers"]
     # the page itself received one raw body per trial, all alike but for the pixels
-    page_bodies = [b for b in bodies if "/stimuli/" in b[0]]
+    page_bodies = list({b[0]: b for b in reversed(bodies) if "/stimuli/" in b[0]}.values())[::-1]  # first per URL
     assert len(page_bodies) == N_PAIRS * REPS
     assert {b[3] for b in page_bodies} == {2 * 3 * w * h}
     assert {b[1] for b in page_bodies} == {200}
