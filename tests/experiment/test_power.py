@@ -10,15 +10,8 @@ import pytest
 from scipy import stats
 
 from nmmm.errors import InvalidInputError
-from nmmm.experiment.stats import (
-    analyse_responses,
-    format_report,
-    pooled_equivalence,
-    tost_binomial,
-    tost_observers_needed,
-    tost_power,
-    tost_power_analysis,
-)
+from nmmm.experiment.power_analysis import tost_observers_needed, tost_power, tost_power_analysis
+from nmmm.experiment.stats import analyse_responses, format_report, pooled_equivalence, tost_binomial
 
 
 def _normal_power(G, m, delta, alpha, rho=0.0, pc=0.5):

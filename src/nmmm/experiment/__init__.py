@@ -9,8 +9,8 @@ better than chance, the prediction is visually validated.
 - :mod:`nmmm.experiment.app` — the web application (:func:`create_app`, :func:`serve`).
 - :mod:`nmmm.experiment.storage` — the SQLite response database (WAL, one commit per response).
 - :mod:`nmmm.experiment.stats` — proportion correct, binomial tests, d' for 2AFC, Wilson and
-  Clopper-Pearson intervals, TOST equivalence and its power (observers needed), pooling over
-  observers, plot.
+  Clopper-Pearson intervals, TOST equivalence, pooling over observers, plot.
+- :mod:`nmmm.experiment.power_analysis` — power of the equivalence test, observers needed.
 - :mod:`nmmm.experiment.export` — CSV export.
 - :mod:`nmmm.experiment.simulation` — :func:`synthetic_pairs` (image pairs to try the server) and
   :func:`simulate_responses` (simulated observers). The worked example is :func:`nmmm.demo.experiment.demo`.
@@ -27,7 +27,8 @@ _LAZY = {
     "binomial_test": "stats", "critical_count": "stats", "dprime_2afc": "stats", "format_report": "stats",
     "plot_analysis": "stats", "pooled_proportion": "stats", "proportion_ci": "stats", "tost_binomial": "stats",
     "create_app": "app", "synthetic_pairs": "simulation", "simulate_responses": "simulation",
-    "tost_power": "stats", "tost_observers_needed": "stats", "tost_power_analysis": "stats", "PowerResult": "stats",
+    "tost_power": "power_analysis", "tost_observers_needed": "power_analysis",
+    "tost_power_analysis": "power_analysis", "PowerResult": "power_analysis",
 }
 
 __all__ = [
