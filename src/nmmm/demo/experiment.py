@@ -54,6 +54,11 @@ def demo(output_dir) -> dict:
         "TOST p (delta 0.1)": float(f"{e.p_value:.4g}"), "equivalent within ±0.1": bool(e.equivalent),
         "observers above chance": sum(g.significant and g.pc > 0.5 for g in analysis.observers),
     }
+    pw = analysis.power
+    if pw is not None:  # how many viewers are enough (issue 20): the seed's 40 volunteers x 20 trials
+        table[f"TOST power, {pw.n_observers} x {pw.n_trials} (delta {pw.delta:g}, true Pc 0.5, ICC {pw.rho:.3g})"] = \
+            round(pw.power, 3)
+        table[f"observers needed for {100 * pw.target_power:.0f} % power"] = pw.observers_needed
     (out / "experiment_summary.json").write_text(json.dumps(table, indent=2), encoding="utf-8")
     text = (f"Simulated 2AFC validation: 40 observers x {n_trials} trials, true mean Pc 0.55 with observer "
             f"spread (ICC 0.05). Pooled Pc {100 * p.pc:.1f} % [{100 * p.interval[0]:.1f}, "
