@@ -190,8 +190,25 @@ def dprime_2afc_counts(k, n, correction: str | None = "loglinear"):
 
 
 # -- confidence intervals of a proportion ------------------------------------------------
+def _binomtest_ci(k, n, confidence, method):
+    """``scipy.stats.binomtest(k, n).proportion_ci(confidence, method)`` broadcast over ``k``, ``n``."""
+    k, n = _counts(k, n)
+    level = _level(confidence)
+    k, n = np.broadcast_arrays(k, n)
+    lo = np.empty(k.shape)
+    hi = np.empty(k.shape)
+    for i in np.ndindex(k.shape):
+        ci = stats.binomtest(int(k[i]), int(n[i])).proportion_ci(level, method=method)
+        lo[i], hi[i] = ci.low, ci.high
+    # the bounds are exact at the ends (scipy's Wilson bound at k = 0 is 0 only to rounding)
+    lo = np.where(k == 0, 0.0, np.clip(lo, 0, 1))
+    hi = np.where(k == n, 1.0, np.clip(hi, 0, 1))
+    return (lo[()], hi[()])
+
+
 def proportion_ci_wilson(k, n, confidence: float = 0.95):
-    """Wilson score interval of a binomial proportion (Wilson 1927; Newcombe 1998, method 3).
+    """Wilson score interval of a binomial proportion (Wilson 1927; Newcombe 1998, method 3),
+    computed by :meth:`scipy.stats.binomtest` ``(...).proportion_ci(method="wilson")``.
 
     Returns ``(lower, upper)`` arrays (broadcast over ``k`` and ``n``).
 
@@ -199,31 +216,18 @@ def proportion_ci_wilson(k, n, confidence: float = 0.95):
     >>> round(float(lo), 4), round(float(hi), 4)
     (0.2553, 0.3662)
     """
-    k, n = _counts(k, n)
-    z = special.ndtri(0.5 + _level(confidence) / 2)
-    p = k / n
-    denom = 1 + z**2 / n
-    centre = (p + z**2 / (2 * n)) / denom
-    half = z / denom * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2))
-    lo, hi = np.clip(centre - half, 0, 1), np.clip(centre + half, 0, 1)
-    lo = np.where(k == 0, 0.0, lo)
-    hi = np.where(k == n, 1.0, hi)
-    return (lo[()], hi[()])
+    return _binomtest_ci(k, n, confidence, "wilson")
 
 
 def proportion_ci_clopper_pearson(k, n, confidence: float = 0.95):
-    """Clopper-Pearson 'exact' interval from beta quantiles (Clopper & Pearson 1934).
+    """Clopper-Pearson 'exact' interval (Clopper & Pearson 1934), computed by
+    :meth:`scipy.stats.binomtest` ``(...).proportion_ci(method="exact")``.
 
     >>> lo, hi = proportion_ci_clopper_pearson(81, 263)  # Newcombe (1998) example: 0.2527-0.3676
     >>> round(float(lo), 4), round(float(hi), 4)
     (0.2527, 0.3676)
     """
-    k, n = _counts(k, n)
-    a = 1 - _level(confidence)
-    with np.errstate(invalid="ignore"):
-        lo = np.where(k == 0, 0.0, stats.beta.ppf(a / 2, np.maximum(k, 1), n - k + 1))
-        hi = np.where(k == n, 1.0, stats.beta.ppf(1 - a / 2, k + 1, np.maximum(n - k, 1)))
-    return (lo[()], hi[()])
+    return _binomtest_ci(k, n, confidence, "exact")
 
 
 #: Confidence-interval methods of a proportion, by name.
