@@ -26,7 +26,7 @@ from pathlib import Path
 from nmmm.demo import sections
 from nmmm.recipes.report import error_section, hook_section, result_section, write_report
 
-__all__ = ["run_demo", "run_sections", "DemoRun", "SectionFailure", "failure_hint"]
+__all__ = ["run_demo", "run_sections", "DemoRun", "SectionFailure", "failure_hint", "demo_next_steps"]
 
 
 @dataclass(frozen=True)
@@ -110,13 +110,16 @@ def _recipe_section(name, out, progress):
         r = compare_recipes(example_path(a), example_path(b), out / "substitution", illuminants=["D65", "A"],
                             progress=progress)
         sec = r["section"]
-        sec["title"] = f"Substitution (nmmm compare): {r['a'].recipe.name} vs {r['b'].recipe.name}"
-        sec["text"] = [f"The binder of the hematite paint substituted: epoxy (A) → ethylcellulose (B), everything else "
+        sec["title"] = f"Substitution (nmmm compare): {r['a'].recipe.name} → {r['b'].recipe.name}"
+        sec["text"] = [f"The binder of the hematite paint substituted: epoxy → ethylcellulose, everything else "
                        f"unchanged — the colour difference seen before anything is made."] + sec["text"]
+        sec["next"] = [("reproduce this section", f"nmmm compare {a} {b} -i D65 -i A -o {out / 'substitution'}"),
+                       ("start your own substitution from the second recipe", f"cp {example_path(b)} my_substitute.toml"),
+                       ("then compare it with the original", f"nmmm compare {a} my_substitute.toml -i D65 -i A -o compare-out")]
         return sec
 
     res = run_recipe(example_path(name), out / name, progress=progress, report=False)
-    sec = result_section(res)
+    sec = result_section(res, source=str(example_path(name)), command=f"nmmm run {name} -o {out / name}")
     if name == "hematite_paint":
         _hematite_series(example_path(name), out / name, sec, progress)
     return sec
@@ -140,8 +143,18 @@ def _hematite_series(path, out, sec, progress):
     sec["figures"] += [fr.get("plot"), gs.get("plot")]
     L = list(gs["results"]["L_D65"])
     trend = "darker" if L[-1] < max(L) else "not darker"
-    sec["text"].append("In an opaque film with independent scattering the colour hardly depends on the fraction "
-                       "(K/S does not); packing (Percus-Yevick dependent scattering) is what separates 5, 7 and 10 %.")
+    from nmmm.recipes.sanity import masstone_unchanged_note
+    from nmmm.recipes.schema import load_recipe
+
+    film_um = load_recipe(path).film.thickness_nm / 1000.0
+    ind = fr["results"][~fr["results"]["param:pigment.dependent_scattering"].astype(bool)]
+    note = masstone_unchanged_note(ind["param:pigment.fraction"], ind[["L_D65", "a_D65", "b_D65"]].to_numpy(float),
+                                   film_um)
+    if note:
+        sec.setdefault("warnings", []).append(note + " Here only packing (Percus-Yevick dependent scattering) "
+                                              "separates 5, 7 and 10 %.")
+    else:
+        sec["text"].append("Packing (Percus-Yevick dependent scattering) changes the colour further at 7 and 10 %.")
     sec["text"].append(f"Series (serial sweeps of this recipe): 5/7/10 % by volume, and body diagonals "
                        f"{', '.join(f'{d:g}' for d in diagonals)} nm at 7 %. Beyond the lightest size "
                        f"(L* = {max(L):.1f} at {diagonals[L.index(max(L))]:g} nm) bigger grains look {trend}: "
@@ -170,6 +183,8 @@ def _hook_section(title, target, out, progress=True):
     summary = hook(out / module_name.replace(".", "_"), **kw)
     sec = hook_section(summary)
     sec["title"] = summary.get("title") or title
+    sec["next"] = sec.get("next") or [("reproduce this section",
+                                       f"nmmm demo --only {module_name} -o {out / module_name.replace('.', '_')}")]
     return sec
 
 
@@ -212,8 +227,22 @@ def run_sections(output_dir="nmmm-demo", quick: bool = False, only=None, progres
     if skipped:
         intro += " Not available in this installation: " + ", ".join(skipped) + "."
     report = write_report(secs, out / "report.html", title="nmmm demo — the seed paper's worked examples",
-                          intro=intro)
+                          intro=intro, next_steps=demo_next_steps())
     return DemoRun(Path(report), failures, skipped)
+
+
+def demo_next_steps() -> list[tuple[str, str]]:
+    """The three commands a formulator uses after the demo: run an own recipe (copied from a
+    shipped one), compare it with the original, sweep one of its parameters."""
+    from nmmm.recipes.schema import example_path
+
+    src = example_path("hematite_paint")
+    return [(f"start from a shipped recipe — copy it (cp {src} my_paint.toml), change the pigment, binder or film "
+             "in it, and run it: spectra, CIELAB, plots and a report", "nmmm run my_paint.toml -o out/my_paint"),
+            ("see what your change does against the original, under daylight and incandescent light",
+             "nmmm compare hematite_paint my_paint.toml -i D65 -i A -o out/compare"),
+            ("find the amount that gives the colour you want: sweep one parameter (resumable; add --vary for a grid)",
+             "nmmm sweep my_paint.toml --vary pigment.fraction=0.03:0.15:5 --serial -o out/sweep")]
 
 
 def run_demo(output_dir="nmmm-demo", quick: bool = False, only=None, progress: bool = True):

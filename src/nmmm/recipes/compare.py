@@ -16,7 +16,7 @@ import numpy as np
 
 from nmmm.errors import RecipeError
 
-__all__ = ["compare_results", "compare_recipes"]
+__all__ = ["compare_results", "compare_recipes", "comparison_section", "recipe_names"]
 
 
 def _common(res_a, res_b):
@@ -79,9 +79,10 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
     a = run_recipe(path_a, out / "A", progress=progress, report=False)
     b = run_recipe(path_b, out / "B", progress=progress, report=False)
     rows = compare_results(a, b, illuminants, a.recipe.lighting.observer)
+    na, nb = recipe_names(a, b)
     fig, ax = plt.subplots(figsize=(7, 4))
-    ax.plot(a.wavelength_nm, a.spectra[a.primary], lw=2, label=f"A: {a.recipe.name} — {a.primary}")
-    ax.plot(b.wavelength_nm, b.spectra[b.primary], lw=2, ls="--", label=f"B: {b.recipe.name} — {b.primary}")
+    ax.plot(a.wavelength_nm, a.spectra[a.primary], lw=2, label=f"{na} — {a.primary}")
+    ax.plot(b.wavelength_nm, b.spectra[b.primary], lw=2, ls="--", label=f"{nb} — {b.primary}")
     _spectrum_axes(ax, [a.primary, b.primary])
     overlay = _finish(fig, out / "spectra_overlay.png")
     figs = [str(overlay)]
@@ -94,14 +95,68 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
             p = out / "images_side_by_side.png"
             Image.fromarray((np.concatenate([ia, gap, ib], axis=1) * 255 + 0.5).astype(np.uint8)).save(p)
             figs.append(str(p))
-    head = rows[0]
-    text = [f"A = {a.recipe.name}; B = {b.recipe.name}. CIEDE2000 between their {a.primary!r} and {b.primary!r} "
-            f"spectra: ΔE00 = " + ", ".join(f"{r['dE00']:.2f} ({r['illuminant']})" for r in rows if r["geometry"] == head["geometry"])
-            + ". ΔE00 ≈ 1 is a just-noticeable difference side by side; above ≈ 2–3 the substitution is visible."]
-    swatches = [(f"A {c['illuminant']}", c["srgb"]) for c in a.colours if c["spectrum"] == a.primary]
-    swatches += [(f"B {c['illuminant']}", c["srgb"]) for c in b.colours if c["spectrum"] == b.primary]
-    summary = {"title": "Substitution: A vs B", "text": text, "figures": figs,
-               "tables": {"Colour differences (CIELAB in 1, ΔE00 in 1)": rows}, "swatches": swatches}
-    report = write_report([summary, result_section(a, f"A: {a.recipe.name}"), result_section(b, f"B: {b.recipe.name}")],
-                          out / "report.html", title=f"nmmm compare — {a.recipe.name} vs {b.recipe.name}")
+    summary = comparison_section(a, b, rows, figs, names=(na, nb))
+    report = write_report([summary, result_section(a, f"First recipe: {na}"), result_section(b, f"Second recipe: {nb}")],
+                          out / "report.html", title=f"nmmm compare — {na} vs {nb}",
+                          next_steps=[("the same comparison under other illuminants",
+                                       f"nmmm compare {_arg(path_a, 'first.toml')} {_arg(path_b, 'second.toml')} "
+                                       f"-i D65 -i A -i FL11 -o {out}")])
     return {"rows": rows, "report": str(report), "a": a, "b": b, "section": summary}
+
+
+def _arg(path, placeholder: str) -> str:
+    """A recipe argument as the user can retype it (a placeholder for recipes given as text)."""
+    try:
+        if isinstance(path, (str, Path)) and Path(str(path)).is_file():
+            return str(path)
+    except (OSError, ValueError):
+        pass
+    return placeholder
+
+
+def recipe_names(res_a, res_b) -> tuple[str, str]:
+    """The names the report calls the two recipes: their own names, told apart when equal
+    (never "A" and "B", which read as illuminant A)."""
+    na, nb = res_a.recipe.name, res_b.recipe.name
+    if na == nb:
+        return f"{na} (first recipe)", f"{nb} (second recipe)"
+    return na, nb
+
+
+def _lab_text(L, a, b) -> str:
+    return f"{L:.1f}, {a:.1f}, {b:.1f}"
+
+
+def comparison_section(res_a, res_b, rows, figures=(), names=None) -> dict:
+    """The comparison as a report section: one summary box per recipe (its swatch under the first
+    illuminant, ΔE00 under each), the overlay and images, and the ΔE00 table with the recipes'
+    names in the headers (illuminants are written "illuminant A", recipes by name)."""
+    from nmmm.recipes.report import srgb_note
+
+    na, nb = names or recipe_names(res_a, res_b)
+    head = rows[0]
+    main = [r for r in rows if r["geometry"] == head["geometry"]]
+    text = [f"CIEDE2000 between the {res_a.primary!r} spectrum of {na} and the {res_b.primary!r} spectrum of {nb}: "
+            + ", ".join(f"ΔE00 = {r['dE00']:.2f} under illuminant {r['illuminant']}" for r in main)
+            + ". ΔE00 ≈ 1 is a just-noticeable difference side by side; above ≈ 2–3 the substitution is visible."]
+    ill0 = main[0]["illuminant"]
+    boxes = []
+    for name, res in ((na, res_a), (nb, res_b)):
+        c = next((c for c in res.colours if c["spectrum"] == res.primary and c["illuminant"] == ill0),
+                 next((c for c in res.colours if c["spectrum"] == res.primary), None))
+        if c is None:
+            continue
+        box = {"heading": name, "swatch": (f"{name} under illuminant {c['illuminant']}", c["srgb"], srgb_note(None, c["L"])),
+               "items": [(f"CIELAB, illuminant {c['illuminant']}", f"L* {c['L']:.1f}   a* {c['a']:.1f}   b* {c['b']:.1f}")]}
+        boxes.append(box)
+    if boxes:
+        boxes[-1]["items"] += [(f"ΔE00 to {na}, illuminant {r['illuminant']}", f"{r['dE00']:.2f}") for r in main]
+    swatches = []
+    for name, res in ((na, res_a), (nb, res_b)):
+        swatches += [(f"{name} — illuminant {c['illuminant']}", c["srgb"], srgb_note(None, c["L"]))
+                     for c in res.colours if c["spectrum"] == res.primary]
+    table = [{"geometry": r["geometry"], "illuminant": f"illuminant {r['illuminant']}",
+              f"{na}: L*, a*, b*": _lab_text(r["L_A"], r["a_A"], r["b_A"]),
+              f"{nb}: L*, a*, b*": _lab_text(r["L_B"], r["a_B"], r["b_B"]), "dE00": r["dE00"]} for r in rows]
+    return {"title": f"Substitution: {na} → {nb}", "text": text, "figures": list(figures), "summary_boxes": boxes,
+            "tables": {"Colour differences (CIELAB in 1, ΔE00 in 1)": table}, "swatches": swatches}

@@ -395,6 +395,9 @@ def compute(recipe: Recipe, recipe_text: str = "", progress: bool = True) -> Run
     """Run the physics of a validated recipe (no files written)."""
     from tqdm import tqdm
 
+    from nmmm.recipes.sanity import warn_if_unusual
+
+    warn_if_unusual(recipe)  # a 20 nm "paint film" is said, not run silently
     w = _grid(recipe)
     res = RunResult(recipe=recipe, recipe_text=recipe_text, wavelength_nm=w)
     steps = ["compounds and levels", recipe.macro, "colours"]
@@ -543,13 +546,11 @@ def _write_netcdf(res, path):
 
 
 def _finish(fig, path):
-    """Lay out, save (110 dpi PNG) and close a figure; return its path."""
-    import matplotlib.pyplot as plt
+    """Lay out, check the axis labels, save (110 dpi PNG) and close a figure; return its path
+    (:func:`nmmm.recipes.figures.save_figure`)."""
+    from nmmm.recipes.figures import save_figure
 
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
 def _spectrum_axes(ax, labels):
@@ -573,17 +574,19 @@ def _plots(res, out):
 
     files = {}
     w = res.wavelength_nm
+    from nmmm.recipes.figures import curve_styles
+
     fig, ax = plt.subplots(figsize=(7, 4))
-    for k, v in res.spectra.items():
-        ax.plot(w, v, lw=2 if k == res.primary else 1.2, label=k)
+    for (k, v), style in zip(res.spectra.items(), curve_styles(len(res.spectra))):
+        ax.plot(w, v, lw=2 if k == res.primary else 1.2, label=k, **style)
     _spectrum_axes(ax, list(res.spectra))
     ax.set_title(res.recipe.name)
     files["spectra plot"] = _finish(fig, out / "spectra.png")
     if res.materials:
         fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6))
-        for k, nk in res.materials.items():
-            a1.plot(w, nk.real, label=k)
-            a2.plot(w, nk.imag, label=k)
+        for (k, nk), style in zip(res.materials.items(), curve_styles(len(res.materials))):
+            a1.plot(w, nk.real, label=k, **style)
+            a2.plot(w, nk.imag, label=k, **style)
         a1.set_ylabel("n (1)")
         a2.set_ylabel("k (1)")
         a2.set_yscale("symlog", linthresh=1e-6)

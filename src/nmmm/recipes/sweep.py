@@ -246,16 +246,14 @@ def sweep(recipe, varies, out_dir, scheduler=None, n_workers: int = 2, serial: b
 
 
 def _sweep_report(df, summary, raw, out):
+    """The sweep's report: the plots, the points (folded when long, all in results.csv), the
+    words that explain a masstone unchanged over a concentration series, and the command that
+    reproduces the sweep."""
+    from nmmm.recipes.sweep_report import sweep_report_section
     from nmmm.recipes.report import write_report
-    from nmmm.recipes.run import _dump_toml
 
-    cols = [c for c in df.columns if c.startswith("param:") or c[:2] in ("L_", "a_", "b_")]
-    rows = [{(c[6:] if c.startswith("param:") else c): r[c] for c in cols} for _, r in df.iterrows()]
-    sec = {"title": f"Sweep of {raw.get('name', 'recipe')}: {summary['n_points']} points",
-           "text": [f"{summary['n_computed']} points computed now, {summary['n_skipped']} found on disk; "
-                    f"{summary['wall_s']:.1f} s wall, {summary['physics_s']:.1f} s of physics. CIELAB of the primary "
-                    f"spectrum ({df['primary'].iloc[0]}) under each illuminant; parameters in the recipe's units."],
-           "figures": [summary["plot"]], "tables": {"Points (CIELAB in 1)": rows}, "recipe": _dump_toml(raw)}
+    sec = sweep_report_section(df, summary, raw, out)
+    sec.pop("outro", None)
     return write_report([sec], out / "report.html", title=sec["title"])
 
 
@@ -264,43 +262,17 @@ def _varies_list(varies):
 
 
 def _axis_label(key: str) -> str:
-    """``pigment.body_diagonal_nm`` -> ``pigment.body_diagonal (nm)``; ``L_D65`` -> ``L* under D65 (1)``."""
-    for suffix, unit in (("_nm", "nm"), ("_um", "µm"), ("_deg", "°"), ("_cm", "cm")):
-        if key.endswith(suffix):
-            return f"{key[:-len(suffix)]} ({unit})"
-    if key[:2] in ("L_", "a_", "b_"):
-        return f"{key[0]}* under {key[2:]} (1)"
-    return f"{key} (1)" if key.endswith("fraction") else key
+    """``pigment.body_diagonal_nm`` -> "pigment body diagonal (nm)"; ``L_D65`` -> "L* under D65 (1)"
+    (:func:`nmmm.recipes.figures.quantity_label`)."""
+    from nmmm.recipes.figures import quantity_label
+
+    return quantity_label(key)
 
 
 def plot_sweep(df, path, quantity: str | None = None):
-    """L* (first illuminant) against the first varied parameter, one curve per value of
-    the second; and the spectra of every point."""
-    import matplotlib
+    """L* (first illuminant) against the first varied parameter, one curve per value of the
+    others; and the spectra of every point — legends in words with units, every curve its own
+    colour and line style (:func:`nmmm.recipes.sweep_report.plot_sweep`)."""
+    from nmmm.recipes.sweep_report import plot_sweep as _plot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    params = [c for c in df.columns if c.startswith("param:")]
-    qty = quantity or next((c for c in df.columns if c.startswith("L_")), None)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.8))
-    x = params[0]
-    groups = df.groupby(params[1]) if len(params) > 1 else [(None, df)]
-    for val, g in groups:
-        a1.plot(g[x], g[qty], "o-", label=f"{params[1][6:]} = {val}" if val is not None else None)
-    a1.set_xlabel(_axis_label(x[6:]))
-    a1.set_ylabel(_axis_label(qty) if qty else "")
-    if len(params) > 1:
-        a1.legend(fontsize=7)
-    a1.grid(alpha=0.3)
-    for _, r in df.iterrows():
-        a2.plot(r["wavelength_nm"], r["spectrum"], lw=1,
-                label=", ".join(f"{p[6:]}={r[p]:g}" if isinstance(r[p], (int, float)) else f"{p[6:]}={r[p]}" for p in params))
-    a2.set_xlabel("wavelength (nm)")
-    a2.set_ylabel(f"{df['primary'].iloc[0]} (1)")
-    a2.grid(alpha=0.3)
-    if len(df) <= 12:
-        a2.legend(fontsize=6)
-    from nmmm.recipes.run import _finish
-
-    return _finish(fig, path)
+    return _plot(df, path, quantity)
