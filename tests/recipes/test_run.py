@@ -27,7 +27,7 @@ def test_gold_ruby_glass_matches_maxwell_garnett_and_beer_lambert(tmp_path):
     for f in ("spectra_csv", "colours_csv", "netcdf", "spectra plot", "nk plot", "report"):
         assert f in res.files
     ds = xr.open_dataset(tmp_path / "results.nc", engine="h5netcdf")
-    w = ds["wavelength_nm"].values
+    w = ds["wavelength"].values
     # seed paper eq. (2), written independently here
     em = get("main/SiO2/Malitson").eps(w)
     ei = get("main/Au/Johnson").eps(w)
@@ -42,7 +42,7 @@ def test_gold_ruby_glass_matches_maxwell_garnett_and_beer_lambert(tmp_path):
     R = np.abs((nk - 1) / (nk + 1)) ** 2
     a = np.exp(-4 * np.pi * nk.imag * d / w)
     T = (1 - R) ** 2 * a / (1 - R**2 * a**2)
-    spec = list(ds["spectrum"].values)
+    spec = list(ds["label"].values)  # the structured coordinates are tested in test_labelled.py
     np.testing.assert_allclose(ds["spectra"].values[spec.index("transmittance ruby_glass (1 mm)")], T, rtol=1e-6, atol=1e-15)
     # the absorption band of the seed paper: near 520-530 nm
     k = ds["k"].values[ruby]

@@ -371,6 +371,36 @@ class MieResult:
     s1: np.ndarray | None = None
     s2: np.ndarray | None = None
 
+    def _repr_html_(self) -> str:
+        """Jupyter display: the input ranges and Q_ext, Q_sca, Q_abs, g against wavelength
+        (or diameter, when only the diameter varies); other axes are shown at their first index."""
+        from nmmm.html_repr import figure_png_base64, result_html
+
+        w, d = np.broadcast_arrays(self.wavelength_nm, self.diameter_nm)
+        curves = {"Q_ext": self.qext, "Q_sca": self.qsca, "Q_abs": self.qabs, "g": self.g}
+        rows = [("shape", np.shape(self.qext)), ("wavelength", f"{np.min(w):g}–{np.max(w):g} nm"),
+                ("diameter", f"{np.min(d):g}–{np.max(d):g} nm"),
+                ("n_medium", f"{np.min(self.n_medium):g}–{np.max(self.n_medium):g}")]
+        def varying(a):
+            return next((i for i in range(a.ndim - 1, -1, -1) if np.ptp(a, axis=i).max() > 0), None)
+
+        axis, x, xlabel = varying(w), w, "wavelength (nm)"
+        if axis is None:
+            axis, x, xlabel = varying(d), d, "diameter (nm)"
+        if axis is None:  # one wavelength and diameter: the numbers only
+            rows += [(k, f"{float(np.ravel(v)[0]):.6g}") for k, v in curves.items()]
+            return result_html("MieResult", rows)
+
+        rows += [(k, f"{np.min(v):.4g}–{np.max(v):.4g}") for k, v in curves.items()]
+
+        def line(a):
+            a = np.broadcast_to(a, w.shape)
+            return np.moveaxis(a, axis, -1).reshape(-1, a.shape[axis])[0]
+
+        png = figure_png_base64(line(x), {k: line(v) for k, v in curves.items()}, xlabel=xlabel,
+                                ylabel="efficiency (1), g (1)", title="Mie efficiencies")
+        return result_html("MieResult", rows, png)
+
     @property
     def geometric_cross_section_nm2(self) -> np.ndarray:
         """π D² / 4 (nm²)."""

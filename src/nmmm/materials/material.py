@@ -127,6 +127,24 @@ class Material:
         lo, hi = self.range_nm
         return f"<{type(self).__name__} '{self.name}' {lo:g}–{hi:g} nm>"
 
+    def _repr_html_(self) -> str:
+        """Jupyter display: range, source and a plot of n and k (visible part of the range)."""
+        from nmmm.html_repr import figure_png_base64, result_html
+
+        lo, hi = self.range_nm
+        a, b = max(lo, 380.0), min(hi, 780.0)
+        if a >= b:  # no visible part: the whole (finite) range
+            a, b = lo, hi if np.isfinite(hi) else lo * 10
+        w = np.linspace(a, b, 161)
+        w = w[1:] if a <= 0 else w
+        nk = self.nk(w)
+        rows = [("type", type(self).__name__), ("range", f"{lo:g}–{hi:g} nm"),
+                ("covers 380–780 nm", "yes" if lo <= 380 and hi >= 780 else "no"),
+                ("source", getattr(self, "reference", "") or "-")]
+        png = figure_png_base64(w, {"n": nk.real, "k": nk.imag}, ylabel="n, k (1)", title=self.name)
+        return result_html(self.name, rows, png)
+
+
 
 def _intersect_ranges(materials) -> tuple[float, float]:
     lo, hi = 0.0, np.inf

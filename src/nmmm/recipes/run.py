@@ -52,6 +52,18 @@ class RunResult:
     files: dict = field(default_factory=dict)          # kind -> path (after write_outputs)
     spectral_images: dict = field(default_factory=dict)  # name -> nmmm.appearance.render.SpectralImage
 
+    def to_xarray(self):
+        """The run as a labelled xarray Dataset (:func:`nmmm.recipes.labelled.run_to_xarray`)."""
+        from nmmm.recipes.labelled import run_to_xarray
+
+        return run_to_xarray(self)
+
+    def _repr_html_(self) -> str:
+        from nmmm.recipes.labelled import run_result_html
+
+        return run_result_html(self)
+
+
 
 # --------------------------------------------------------------------------------------
 # compounds and levels
@@ -477,7 +489,9 @@ def write_outputs(res: RunResult, out_dir, report: bool = True) -> dict:
                             [f"{r[q]:.4f}" for q in ("L", "a", "b", "C", "h_deg")] + ["", "", ""])
         files["colours_csv"] = p
     if o.netcdf:
-        files["netcdf"] = _write_netcdf(res, out / "results.nc")
+        from nmmm.recipes.labelled import write_run_netcdf
+
+        files["netcdf"] = write_run_netcdf(res, out / "results.nc")
     if o.plots:
         files.update(_plots(res, out))
     if o.images and res.images:

@@ -236,6 +236,9 @@ def sweep(recipe, varies, out_dir, scheduler=None, n_workers: int = 2, serial: b
     df[scalar_cols].to_csv(out / "results.csv", index=False)
     summary = SweepSummary(n_points=len(points), n_skipped=skipped, n_computed=len(todo),
                            wall_s=time.perf_counter() - t_start, physics_s=physics, out_dir=str(out), results=df)
+    from nmmm.recipes.labelled import write_sweep_cube  # the labelled cube: results.nc (+ results.zarr)
+
+    summary["cube"] = write_sweep_cube(df, _varies_list(varies), out)
     if plots and len(df):
         try:
             summary["plot"] = str(plot_sweep(df, out / "sweep.png"))
