@@ -145,7 +145,6 @@ class Material:
         return result_html(self.name, rows, png)
 
 
-
 def _intersect_ranges(materials) -> tuple[float, float]:
     lo, hi = 0.0, np.inf
     for m in materials:
