@@ -256,3 +256,15 @@ def test_apparent_property_for_rve_study():
     assert prop(G.laminate(8, 0.5, axis=0)) == pytest.approx(1 / (0.5 / 2 + 0.5 / 4))
     prop = apparent_property({0: 2.0, 1: 4.0})
     assert prop(G.laminate(8, 0.5, axis=0)) == pytest.approx((3.0 + 1 / (0.5 / 2 + 0.5 / 4)) / 2)
+
+
+def test_solves_leave_the_numba_thread_count_unchanged():
+    """A solve uses its own thread count and restores the caller's (issue 22: no global
+    numba.set_num_threads side effect on later kernels)."""
+    import numba
+
+    before = numba.get_num_threads()
+    lab = G.boolean_spheres(16, 0.2, 2, ndim=3, seed=0)
+    for workers in (1, 2):
+        fft_permittivity(lab, {0: 2.25, 1: -10 + 1j}, workers=workers)
+        assert numba.get_num_threads() == before

@@ -18,6 +18,8 @@ Fields are stored as ``(d, N)`` arrays (d components, N voxels, C order); labels
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numba
 import numpy as np
 from numba import njit, prange
@@ -219,5 +221,18 @@ def mean_flux(x, labels, tab, e0, counts):
 
 
 def set_threads(n: int) -> None:
-    """Use at most ``n`` Numba threads (the machine's cores are shared)."""
+    """Use at most ``n`` Numba threads from now on, in the calling thread (a lasting change:
+    prefer :func:`threads`, which restores the previous count)."""
     numba.set_num_threads(max(1, min(int(n), numba.config.NUMBA_NUM_THREADS)))
+
+
+@contextmanager
+def threads(n: int):
+    """Run the enclosed kernels with at most ``n`` Numba threads, then restore the previous
+    count: a solve never changes the thread count of later kernels in the process."""
+    before = numba.get_num_threads()
+    set_threads(n)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)

@@ -43,6 +43,7 @@ References
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -63,6 +64,18 @@ class SolveOutcome:
     converged: bool = True
     solver: str = ""
     message: str = ""
+
+
+def _local_threads(solve):
+    """Run ``solve(problem, ...)`` with ``problem.workers`` Numba threads and restore the caller's
+    count afterwards (no process-wide side effect)."""
+
+    @functools.wraps(solve)
+    def wrapper(problem, *args, **kwargs):
+        with kernels.threads(problem.workers):
+            return solve(problem, *args, **kwargs)
+
+    return wrapper
 
 
 class Problem:
@@ -88,8 +101,7 @@ class Problem:
         self._has_ny = bool(ny.any())
         self._axes = tuple(range(1, self.d + 1))
         self.q = np.zeros((self.d, self.n), dtype=self.dtype)  # work buffer
-        self.projections = 0
-        kernels.set_threads(self.workers)
+        self.projections = 0  # Numba threads: set per solve by ``_local_threads`` and restored
 
     # -- operators ----------------------------------------------------------------------
     def field(self) -> np.ndarray:
@@ -159,6 +171,7 @@ def _krylov_start(problem: Problem, tab, e0, keep_x: bool, name: str):
 
 
 # -- COCG -------------------------------------------------------------------------------------
+@_local_threads
 def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_x=True) -> SolveOutcome:
     """Conjugate orthogonal conjugate gradient on Γ ε x = −Γ ε E0 (van der Vorst & Melissen 1990)."""
     tab, start, r, nb, x, done = _krylov_start(problem, tab, e0, keep_x, "cocg")
@@ -212,6 +225,7 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
 
 
 # -- BiCGStab ---------------------------------------------------------------------------------
+@_local_threads
 def solve_bicgstab(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_x=True) -> SolveOutcome:
     """BiCGStab (van der Vorst 1992) on the Galerkin system; two projections per iteration."""
     tab, start, b, nb, x, done = _krylov_start(problem, tab, e0, keep_x, "bicgstab")
@@ -267,6 +281,7 @@ def solve_bicgstab(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, k
 
 
 # -- GMRES ------------------------------------------------------------------------------------
+@_local_threads
 def solve_gmres(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_x=True, restart=30) -> SolveOutcome:
     """Restarted GMRES (:func:`scipy.sparse.linalg.gmres`) on the Galerkin system."""
     from scipy.sparse.linalg import LinearOperator, gmres
@@ -315,6 +330,7 @@ def reference_eyre_milton(tab) -> complex:
     return complex(cands[int(np.argmin(rates))])
 
 
+@_local_threads
 def solve_eyre_milton(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=20000, keep_x=True, eps0=None) -> SolveOutcome:
     """Eyre-Milton scheme u ← (I − 2Γ)(ε − ε0)(ε + ε0)⁻¹ u + 2 ε0 E0, E = (ε + ε0)⁻¹ u.
 
@@ -358,6 +374,7 @@ def solve_eyre_milton(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=2000
     return SolveOutcome(x, flux, problem.projections - start, history, converged, "eyre_milton", msg)
 
 
+@_local_threads
 def solve_basic(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=20000, keep_x=True, eps0=None) -> SolveOutcome:
     """Moulinec-Suquet fixed point E ← E0 − Γ (ε − ε0)/ε0 E, ε0 = (ε_a + ε_b)/2 by default."""
     tab = np.asarray(tab, dtype=complex)

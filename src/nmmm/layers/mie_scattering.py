@@ -43,6 +43,7 @@ References
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numba
@@ -334,6 +335,63 @@ def _mie_batch(m, x, mu, out, s1, s2, nchunk):
                 _one_particle(m[b], x[b], mu, out[b], s1[b], s2[b])
 
 
+#: The same kernel compiled without threads: small batches run here, since waking the thread
+#: pool costs ~10 µs on an idle machine and up to ~10 ms on a loaded one (issue 22).
+_mie_batch_serial = numba.njit(cache=True)(_mie_batch.py_func)
+
+#: Series terms (Σ over particles of ~(x + 4 x^⅓ + 2) · (1 + angles)) above which a batch is
+#: worth the parallel launch.
+PARALLEL_ABOVE_TERMS = 20_000
+
+
+def _work_terms(x_layers, n_angles) -> float:
+    """Rough count of Mie series terms of a batch (outer size parameter per particle)."""
+    x = x_layers[:, -1]
+    return float(np.sum(x + 4.0 * np.cbrt(x) + 2.0)) * x_layers.shape[1] * (1 + n_angles)
+
+
+@numba.njit(cache=True)
+def _mie_single(m, x):
+    """One homogeneous sphere without amplitudes: (Q_ext, Q_sca, Q_back, g) from
+    :func:`_one_sphere` (scalar arguments: no array typing on the call)."""
+    az = abs(m * x)
+    D = np.empty(int(max(_n_max(x), az) + 4.0 * az ** (1.0 / 3.0)) + 12, dtype=np.complex128)
+    out = np.empty(4)
+    _one_sphere(m, x, D, out)
+    return out[0], out[1], out[2], out[3]
+
+
+_PLAIN_REAL = frozenset((int, float, np.float64, np.float32, np.int64, np.int32))
+_PLAIN_COMPLEX = _PLAIN_REAL | {complex, np.complex128, np.complex64}
+
+
+def _mie_scalar(n_particle, n_medium, diameter_nm, wavelength_nm):
+    """Fast path of :func:`mie` for one sphere given as plain numbers, or None when any
+    argument is not a plain valid number (the general path then validates and says why).
+
+    Same kernel, same values; the efficiencies come back as NumPy float64 scalars (shape ``()``,
+    like the general path's 0-d arrays) so that the call costs about what miepython's does."""
+    if (type(wavelength_nm) not in _PLAIN_REAL or type(diameter_nm) not in _PLAIN_REAL
+            or type(n_medium) not in _PLAIN_REAL or type(n_particle) not in _PLAIN_COMPLEX):
+        return None
+    w, d, nm, npc = float(wavelength_nm), float(diameter_nm), float(n_medium), complex(n_particle)
+    # comparisons are False for NaN; the upper bound excludes infinity
+    if not (0 < w < math.inf and 0 < d < math.inf and 0 < nm < math.inf
+            and 0 < npc.real < math.inf and 0 <= npc.imag < math.inf):
+        return None
+    x = math.pi * d * nm / w
+    qext, qsca, qback, g = _mie_single(npc / nm, x)
+    f = np.float64
+    # the frozen dataclass's generated __init__ (12 object.__setattr__ calls) would cost more
+    # than the series itself: fill the same fields directly
+    result = object.__new__(MieResult)
+    object.__setattr__(result, "__dict__", {
+        "qext": f(qext), "qsca": f(qsca), "qabs": f(qext - qsca), "qback": f(qback), "g": f(g),
+        "size_parameter": f(x), "diameter_nm": f(d), "wavelength_nm": f(w), "n_medium": f(nm),
+        "angle_deg": None, "s1": None, "s2": None})
+    return result
+
+
 # --------------------------------------------------------------------------------------
 # public interface
 # --------------------------------------------------------------------------------------
@@ -478,14 +536,16 @@ def _run(m_layers, x_layers, shape, angles_deg, diameter_nm, wavelength_nm, n_me
     out = np.empty((B, 4))
     s1 = np.empty((B, A), dtype=complex)
     s2 = np.empty((B, A), dtype=complex)
-    _mie_batch(
+    parallel = numba.get_num_threads() > 1 and _work_terms(x_layers, A) >= PARALLEL_ABOVE_TERMS
+    kernel = _mie_batch if parallel else _mie_batch_serial
+    kernel(
         np.ascontiguousarray(m_layers, dtype=np.complex128),
         np.ascontiguousarray(x_layers, dtype=np.float64),
         np.ascontiguousarray(mu, dtype=np.float64),
         out,
         s1,
         s2,
-        max(1, min(B, 8 * numba.get_num_threads())),
+        max(1, min(B, 8 * numba.get_num_threads())) if parallel else 1,
     )
     qext, qsca, qback, g = (out[:, i].reshape(shape) for i in range(4))
     return MieResult(
@@ -594,6 +654,10 @@ def mie(n_particle, n_medium, diameter_nm, wavelength_nm, angles_deg=None) -> Mi
     >>> print(f"{float(r.qext):.5f} {float(r.qback):.5f}")
     3.10543 2.92534
     """
+    if angles_deg is None:
+        one = _mie_scalar(n_particle, n_medium, diameter_nm, wavelength_nm)
+        if one is not None:
+            return one
     return _mie_layers([n_particle], n_medium, [diameter_nm], wavelength_nm, angles_deg, [("n_particle", "diameter_nm")])
 
 
