@@ -77,19 +77,57 @@ def cli():
     """
 
 
+#: the prefix of every one-line usage or data error of the ``nmmm`` command
+ERROR_PREFIX = "error: "
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _os_error_line(exc: OSError) -> str:
+    where = f"{exc.filename!r}: " if getattr(exc, "filename", None) else ""
+    return f"{where}{exc.strerror or exc}"
+
+
 def main(argv=None):
-    """Entry point of the ``nmmm`` console script; nmmm errors become clean messages."""
+    """Entry point of the ``nmmm`` console script: one voice for every error.
+
+    Usage and data errors (click's usage errors, every :class:`~nmmm.errors.NmmmError`, recipe
+    errors included) print one line ``error: <what is wrong and what would be right>`` on stderr
+    and exit with status 2. A failure of the system rather than of the input (a full disk, an
+    unreadable folder, too little memory) prints one ``error:`` line too and exits with 1. A
+    command's own failure status (``nmmm demo`` with a failed section) keeps its exit 1.
+    """
     try:
         cli.main(args=argv, standalone_mode=False)
     except click.exceptions.Abort:
         click.echo("Aborted.", err=True)
         return 1
+    except click.exceptions.Exit as exc:
+        return exc.exit_code
+    except click.UsageError as exc:
+        hint = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
+        click.echo(ERROR_PREFIX + _one_line(exc.format_message()) + hint, err=True)
+        return 2
     except click.ClickException as exc:
-        exc.show()
+        click.echo(ERROR_PREFIX + _one_line(exc.format_message()), err=True)
         return exc.exit_code
     except NmmmError as exc:
-        click.echo(f"error: {exc}", err=True)
+        click.echo(ERROR_PREFIX + _one_line(exc), err=True)
         return 2
+    except MemoryError:
+        click.echo(ERROR_PREFIX + "not enough memory for this input; use a coarser grid or fewer points", err=True)
+        return 1
+    except RecursionError:
+        click.echo(ERROR_PREFIX + "an input nested too deep to read; a valid file nests a few levels", err=True)
+        return 2
+    except UnicodeDecodeError as exc:
+        click.echo(ERROR_PREFIX + f"a file is not UTF-8 text (byte {exc.start}); save it as UTF-8", err=True)
+        return 2
+    except OSError as exc:
+        click.echo(ERROR_PREFIX + _os_error_line(exc), err=True)
+        return 1
     return 0
 
 

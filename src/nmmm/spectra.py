@@ -20,6 +20,10 @@ from nmmm.errors import InvalidInputError
 VISIBLE_NM = (380.0, 780.0)
 
 
+#: most wavelengths :func:`wavelength_grid` makes (0.001 nm over the visible is 400 001)
+MAX_GRID_POINTS = 1_000_000
+
+
 def wavelength_grid(start_nm: float = 380.0, stop_nm: float = 780.0, step_nm: float = 5.0) -> np.ndarray:
     """Return an inclusive, evenly spaced wavelength grid in nm.
 
@@ -28,9 +32,19 @@ def wavelength_grid(start_nm: float = 380.0, stop_nm: float = 780.0, step_nm: fl
     >>> wavelength_grid(step_nm=1).size
     401
     """
+    if not (np.isfinite(start_nm) and np.isfinite(stop_nm) and np.isfinite(step_nm)):
+        raise InvalidInputError(f"need finite start_nm, stop_nm, step_nm, got {start_nm}, {stop_nm}, {step_nm}")
     if not step_nm > 0 or not stop_nm > start_nm:
         raise InvalidInputError(f"need start_nm < stop_nm and step_nm > 0, got {start_nm}, {stop_nm}, {step_nm}")
-    n = int(round((stop_nm - start_nm) / step_nm)) + 1
+    if not start_nm > 0:
+        raise InvalidInputError(f"start_nm = {start_nm}: wavelengths are > 0 nm (the visible is 380-780 nm)")
+    n = (stop_nm - start_nm) / step_nm + 1
+    if n > MAX_GRID_POINTS:
+        raise InvalidInputError(
+            f"step_nm = {step_nm:g} gives {n:.3g} wavelengths from {start_nm:g} to {stop_nm:g} nm "
+            f"({n * 16 / 1e9:.3g} GB per complex array), more than {MAX_GRID_POINTS:,}; a spectrum needs a "
+            "step of 0.1-10 nm")
+    n = int(round(n - 1)) + 1
     return np.linspace(start_nm, start_nm + (n - 1) * step_nm, n)
 
 

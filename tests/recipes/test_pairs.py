@@ -72,5 +72,5 @@ def test_cli_run_pair_with(grey_metallic_run, tmp_path):
     ps = load_pairs(tmp_path / "o" / "pairs.toml")
     np.testing.assert_allclose(_png(ps.pairs[0].rendered), _png(tmp_path / "o" / "image_left_eye.png"), atol=1)
     bad = CliRunner().invoke(run, [str(recipe), "-o", str(tmp_path / "o2"), "--pair-with", str(tmp_path / "none.png")])
-    assert bad.exit_code == 1 and "photograph (--pair-with)" in bad.output and "not found" in bad.output
+    assert bad.exit_code == 2 and "photograph (--pair-with)" in bad.output and "not found" in bad.output
     assert not (tmp_path / "o2").exists()  # refused before running

@@ -24,7 +24,7 @@ def _parse_shape(text):
     if text == "cube":
         return Shape.cube()
     if text.startswith("spheroid="):
-        return Shape.spheroid(float(text.split("=", 1)[1]))
+        return Shape.spheroid(_number(text.split("=", 1)[1], "spheroid ASPECT_RATIO"))
     raise InvalidInputError(f"unknown shape {text!r}; use sphere, cube or spheroid=ASPECT_RATIO")
 
 
@@ -36,8 +36,17 @@ def _parse_inclusion(spec):
     # database keys contain '/', not ':'; KEY:FRACTION[:SHAPE[:RADIUS]]
     if len(parts) < 2:
         raise click.BadParameter(f"{spec!r}: expected KEY:FRACTION[:SHAPE[:RADIUS_NM]]")
-    radius = float(parts[3]) if len(parts) > 3 and parts[3] else None
-    return Inclusion(get(parts[0]), float(parts[1]), _parse_shape(parts[2] if len(parts) > 2 else ""), radius)
+    radius = _number(parts[3], f"{spec!r}: RADIUS_NM") if len(parts) > 3 and parts[3] else None
+    fraction = _number(parts[1], f"{spec!r}: FRACTION")
+    return Inclusion(get(parts[0]), fraction, _parse_shape(parts[2] if len(parts) > 2 else ""), radius)
+
+
+def _number(text: str, what: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise click.BadParameter(f"{what} must be a number, got {text[:20]!r} (e.g. KEY:0.05:sphere:20)",
+                                 param_hint="'--inclusion'") from None
 
 
 @click.group()

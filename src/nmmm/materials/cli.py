@@ -40,7 +40,8 @@ def _load(key):
 
 @materials.command()
 @click.argument("key")
-@click.option("--points", default=9, show_default=True, help="rows of n, k to print")
+@click.option("--points", default=9, show_default=True, type=click.IntRange(1, 100_000),
+              help="rows of n, k to print (1 to 100 000)")
 def show(key, points):
     """Show KEY (database key, .csv or .yml file): range, reference, sample of n and k."""
     m = _load(key)

@@ -29,6 +29,11 @@ from nmmm.materials.refractiveindex_formulas import formula_model
 _UNIT = {"nm": 1.0, "um": 1000.0, "µm": 1000.0, "micron": 1000.0, "microns": 1000.0, "mum": 1000.0}
 
 
+#: bounds nmmm accepts for tabulated optical constants (n + ik of real materials, 10 nm to 1 mm)
+N_MAX = 1000.0
+WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM = 10.0, 1.0e6
+
+
 def _existing(path) -> Path:
     p = Path(path)
     if not p.is_file():
@@ -36,12 +41,64 @@ def _existing(path) -> Path:
     return p
 
 
+def _text(p: Path, encoding: str = "utf-8-sig") -> str:
+    """The file's text; a binary, UTF-16 or otherwise non-UTF-8 file is a DataFileError."""
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise DataFileError(f"{p}: cannot read the file ({exc.strerror or exc})") from None
+    if b"\x00" in data[:4096]:
+        raise DataFileError(f"{p}: a binary or UTF-16 file, not UTF-8 text; save it as UTF-8 text (CSV or YAML)")
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError as exc:
+        raise DataFileError(f"{p}: not UTF-8 text (byte {exc.start}); save it as UTF-8") from None
+
+
+def _shown(text: str) -> str:
+    """A short, sanitised description of file content for an error message: short plain text
+    (letters, digits, separators) is quoted; anything else is only described, so that a
+    message never echoes a line of a file that was not meant to be a data file."""
+    text = str(text)
+    if len(text) <= 40 and re.fullmatch(r"[\w .,;+\-()\[\]µλ]*", text):
+        return repr(text)
+    return f"a {len(text)}-character line that is not a column header or numbers"
+
+
+def check_nk_table(p, w, n, k, row0: int = 2, what: str = "data row") -> None:
+    """Refuse tabulated constants no material has: n <= 0, n or k above :data:`N_MAX`, wavelengths
+    outside 10 nm - 1 mm (often µm values under an nm header, or the reverse); rows are named."""
+    bad = np.flatnonzero(w <= 0)
+    if bad.size:
+        raise DataFileError(f"{p}: wavelength {w[bad[0]]:g} nm at {what} {bad[0] + row0} is not > 0")
+    if np.max(w) < WAVELENGTH_MIN_NM:
+        raise DataFileError(f"{p}: the wavelengths run from {np.min(w):g} to {np.max(w):g} nm, below "
+                            f"{WAVELENGTH_MIN_NM:g} nm; they look like µm under an nm header: name the column "
+                            "'wavelength_um' (or give nm values)")
+    if np.min(w) > WAVELENGTH_MAX_NM:
+        raise DataFileError(f"{p}: the wavelengths run from {np.min(w):g} to {np.max(w):g} nm, above 1 mm; they "
+                            "look like nm under a µm header: name the column 'wavelength_nm'")
+    bad = np.flatnonzero((w < WAVELENGTH_MIN_NM) | (w > WAVELENGTH_MAX_NM))
+    if bad.size:
+        raise DataFileError(f"{p}: wavelength {w[bad[0]]:g} nm at {what} {bad[0] + row0} is outside 10 nm - 1 mm; "
+                            "check the unit in the header")
+    bad = np.flatnonzero(n <= 0)
+    if bad.size:
+        raise DataFileError(f"{p}: n = {n[bad[0]]:g} at {what} {bad[0] + row0}; nmmm needs n > 0 (a real index; "
+                            "metals have small positive n and large k)")
+    for col, name in ((n, "n"), (k, "k")):
+        bad = np.flatnonzero(col > N_MAX)
+        if bad.size:
+            raise DataFileError(f"{p}: {name} = {col[bad[0]]:g} at {what} {bad[0] + row0} is above {N_MAX:g}; "
+                                "no material has that (a unit or column mix-up?)")
+
+
 def _wavelength_unit(header: str, path) -> float:
     h = header.strip().lower().replace(" ", "")
     m = re.match(r"^(wavelength|wl|lambda|λ)[_\(\[]?(nm|um|µm|microns?|mum)[\)\]]?$", h)
     if not m:
         raise DataFileError(
-            f"{path}: the first column header {header!r} must declare the wavelength unit, "
+            f"{path}: the first column header ({_shown(header)}) must declare the wavelength unit, "
             "e.g. 'wavelength_nm' or 'wavelength_um'"
         )
     return _UNIT[m.group(2)]
@@ -50,7 +107,7 @@ def _wavelength_unit(header: str, path) -> float:
 def read_csv(path, name: str | None = None) -> TabulatedMaterial:
     """Read a CSV of wavelength, n, k (unit declared in the header) as a Material."""
     p = _existing(path)
-    text = p.read_text(encoding="utf-8-sig")
+    text = _text(p)
     meta, rows = {}, []
     for line in text.splitlines():
         s = line.strip()
@@ -67,16 +124,18 @@ def read_csv(path, name: str | None = None) -> TabulatedMaterial:
     reader = list(csv.reader(io.StringIO("\n".join(rows)), skipinitialspace=True))
     header = [h.strip().lower() for h in reader[0]]
     if len(header) < 2:
-        raise DataFileError(f"{p}: need columns wavelength, n[, k]; got header {reader[0]}")
+        raise DataFileError(f"{p}: need columns wavelength, n[, k]; the first line ({_shown(','.join(reader[0]))}) "
+                            "is not such a header (e.g. wavelength_nm,n,k)")
     scale = _wavelength_unit(header[0], p)
     if header[1] not in ("n",) or (len(header) > 2 and header[2] not in ("k",)):
-        raise DataFileError(f"{p}: columns after the wavelength must be named 'n' and 'k'; got {reader[0][1:]}")
+        raise DataFileError(f"{p}: columns after the wavelength must be named 'n' and 'k'; got "
+                            f"{_shown(','.join(reader[0][1:]))}")
     data = []
     for i, row in enumerate(reader[1:], start=2):
         try:
             vals = [float(c) for c in row[: len(header)]]
         except ValueError:
-            raise DataFileError(f"{p}: row {i} ({','.join(row)}) is not numeric") from None
+            raise DataFileError(f"{p}: row {i} ({_shown(','.join(row))}) is not numeric") from None
         if len(vals) != len(header):
             raise DataFileError(f"{p}: row {i} has {len(vals)} values, expected {len(header)}")
         data.append(vals)
@@ -97,6 +156,7 @@ def read_csv(path, name: str | None = None) -> TabulatedMaterial:
     if bad.size:
         raise DataFileError(
             f"{p}: wavelengths must increase strictly; data row {bad[0] + 3} does not follow row {bad[0] + 2}")
+    check_nk_table(p, w, n, k)
     try:
         return TabulatedMaterial(name or meta.get("name", p.stem), w, n, k, reference=meta.get("reference", str(p)))
     except InvalidInputError as exc:
@@ -106,15 +166,12 @@ def read_csv(path, name: str | None = None) -> TabulatedMaterial:
 def write_csv(material: Material, path, wavelength_nm) -> Path:
     """Write ``material`` sampled at ``wavelength_nm`` as a CSV that :func:`read_csv` loads."""
     nk = material.nk(wavelength_nm)
-    p = Path(path)
-    with p.open("w", encoding="utf-8") as fh:
-        fh.write(f"# name: {material.name}\n")
-        if material.reference:
-            fh.write(f"# reference: {material.reference}\n")
-        fh.write("wavelength_nm,n,k\n")
-        for w, v in zip(np.ravel(wavelength_nm), nk.ravel()):
-            fh.write(f"{w:.6g},{v.real:.8g},{max(v.imag, 0.0):.8g}\n")
-    return p
+    from nmmm.atomic_io import atomic_write_text
+
+    lines = [f"# name: {material.name}"] + ([f"# reference: {material.reference}"] if material.reference else [])
+    lines.append("wavelength_nm,n,k")
+    lines += [f"{w:.6g},{v.real:.8g},{max(v.imag, 0.0):.8g}" for w, v in zip(np.ravel(wavelength_nm), nk.ravel())]
+    return atomic_write_text(path, "\n".join(lines) + "\n")  # complete, or the old file untouched
 
 
 def read_yaml(path, name: str | None = None) -> Material:
@@ -125,22 +182,32 @@ def read_yaml(path, name: str | None = None) -> Material:
 
     p = _existing(path)
     try:
-        doc = yaml.safe_load(p.read_text(encoding="utf-8"))
+        doc = yaml.safe_load(_text(p, "utf-8"))
     except yaml.YAMLError as exc:
-        raise DataFileError(f"{p}: not valid YAML ({exc})") from None
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        raise DataFileError(f"{p}: not valid YAML{where}") from None
+    except RecursionError:
+        raise DataFileError(f"{p}: YAML nested too deep; a refractiveindex.info file nests 3 levels") from None
     if not isinstance(doc, dict) or "DATA" not in doc:
-        raise DataFileError(f"{p}: a refractiveindex.info file needs a DATA list")
+        raise DataFileError(f"{p}: a refractiveindex.info file is a mapping with a DATA list; got "
+                            f"{'a mapping without DATA' if isinstance(doc, dict) else 'a ' + type(doc).__name__}")
+    if not isinstance(doc["DATA"], list) or not all(isinstance(it, dict) for it in doc["DATA"]):
+        raise DataFileError(f"{p}: DATA must be a list of mappings with a 'type' (e.g. '- type: tabulated nk')")
     n_piece = k_piece = None
     for item in doc["DATA"]:
         kind = str(item.get("type", "")).strip()
         if kind.startswith("tabulated"):
-            cols = kind.split()[1]
+            cols = kind.split()[1] if len(kind.split()) == 2 else ""
+            if cols not in ("nk", "n", "k"):
+                raise DataFileError(f"{p}: DATA type ({_shown(kind)}) must be 'tabulated nk', 'tabulated n' or "
+                                    "'tabulated k'")
             rows = []
             for i, line in enumerate(str(item.get("data", "")).strip().splitlines(), start=1):
                 try:
                     rows.append([float(v) for v in line.split()])
                 except ValueError:
-                    raise DataFileError(f"{p}: {kind} row {i} ({line!r}) is not numeric") from None
+                    raise DataFileError(f"{p}: {kind} row {i} ({_shown(line)}) is not numeric") from None
             arr = np.array(rows, dtype=float)
             if arr.ndim != 2 or arr.shape[1] != len(cols) + 1:
                 raise DataFileError(f"{p}: '{kind}' needs {len(cols) + 1} columns per row")
@@ -152,6 +219,9 @@ def read_yaml(path, name: str | None = None) -> Material:
             bad = np.flatnonzero(np.diff(w) <= 0)
             if bad.size:
                 raise DataFileError(f"{p}: wavelengths must increase strictly ({kind} row {bad[0] + 2})")
+            colmap = {c: arr[:, j] for j, c in enumerate(cols, start=1)}
+            check_nk_table(p, w, colmap.get("n", np.ones_like(w)), np.abs(colmap.get("k", np.zeros_like(w))),
+                           row0=1, what=f"{kind} row")
             for j, col in enumerate(cols, start=1):
                 if col == "k" and np.any(arr[:, j] < 0):
                     raise DataFileError(f"{p}: k < 0 at {kind} row {int(np.flatnonzero(arr[:, j] < 0)[0]) + 1}")
@@ -172,7 +242,8 @@ def read_yaml(path, name: str | None = None) -> Material:
             except DataFileError as exc:
                 raise DataFileError(f"{p}: {exc}") from None
         else:
-            raise DataFileError(f"{p}: unknown DATA type {kind!r}")
+            raise DataFileError(f"{p}: unknown DATA type ({_shown(kind)}); use 'tabulated nk', 'tabulated n', "
+                                "'tabulated k' or 'formula N'")
     if n_piece is None:
         raise DataFileError(f"{p}: no n data (only k); nmmm needs n")
     from nmmm.materials.database import _clean_reference

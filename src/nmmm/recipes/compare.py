@@ -64,8 +64,17 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
     """Run both recipes into ``out_dir/A`` and ``out_dir/B`` and write ``out_dir/report.html``.
 
     Returns ``{"rows": [...], "report": path, "a": RunResult, "b": RunResult, "section": dict}``
-    (``section``: the comparison as a report section, for :mod:`nmmm.demo`).
+    (``section``: the comparison as a report section, for :mod:`nmmm.demo`). The folder is locked
+    for the whole comparison (a second one into it is refused); ``A`` and ``B`` are written
+    atomically, and the report last, atomically.
     """
+    from nmmm.atomic_io import folder_lock
+
+    with folder_lock(out_dir):
+        return _compare_recipes(path_a, path_b, out_dir, illuminants, progress)
+
+
+def _compare_recipes(path_a, path_b, out_dir, illuminants, progress):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -96,11 +105,15 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
             Image.fromarray((np.concatenate([ia, gap, ib], axis=1) * 255 + 0.5).astype(np.uint8)).save(p)
             figs.append(str(p))
     summary = comparison_section(a, b, rows, figs, names=(na, nb))
-    report = write_report([summary, result_section(a, f"First recipe: {na}"), result_section(b, f"Second recipe: {nb}")],
-                          out / "report.html", title=f"nmmm compare — {na} vs {nb}",
-                          next_steps=[("the same comparison under other illuminants",
-                                       f"nmmm compare {_arg(path_a, 'first.toml')} {_arg(path_b, 'second.toml')} "
-                                       f"-i D65 -i A -i FL11 -o {out}")])
+    from nmmm.atomic_io import atomic_path
+
+    with atomic_path(out / "report.html") as tmp:
+        write_report([summary, result_section(a, f"First recipe: {na}"), result_section(b, f"Second recipe: {nb}")],
+                     tmp, title=f"nmmm compare — {na} vs {nb}",
+                     next_steps=[("the same comparison under other illuminants",
+                                  f"nmmm compare {_arg(path_a, 'first.toml')} {_arg(path_b, 'second.toml')} "
+                                  f"-i D65 -i A -i FL11 -o {out}")])
+    report = out / "report.html"
     return {"rows": rows, "report": str(report), "a": a, "b": b, "section": summary}
 
 

@@ -85,9 +85,9 @@ def _compound_material(name, spec, base_dir):
         except TypeError as exc:
             raise RecipeError(f"compounds.{name}.params: {exc}") from None
     if spec.file is not None:
-        p = Path(spec.file)
-        if not p.is_absolute() and base_dir:
-            p = Path(base_dir) / p
+        from nmmm.recipes.schema import compound_file
+
+        p = compound_file(name, spec.file, base_dir)  # confined to the recipe's folder
         if p.suffix.lower() in (".yml", ".yaml"):
             return M.read_yaml(p, name=label)
         return M.read_csv(p, name=label)
@@ -459,10 +459,26 @@ def _safe(label: str) -> str:
     return re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_")
 
 
-def write_outputs(res: RunResult, out_dir, report: bool = True) -> dict:
-    """Write CSV, NetCDF, plots, images and the HTML report of a result into ``out_dir``."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+def write_outputs(res: RunResult, out_dir, report: bool = True, lock: bool = True) -> dict:
+    """Write CSV, NetCDF, plots, images and the HTML report of a result into ``out_dir``.
+
+    Atomic (:func:`nmmm.atomic_io.atomic_output_dir`): everything is written into a temporary
+    folder beside ``out_dir`` that takes its place only when complete; a second run into a
+    folder in use is refused (``lock=False`` when the caller already holds the folder's lock).
+    """
+    from nmmm.atomic_io import atomic_output_dir
+
+    final = Path(out_dir)
+    with atomic_output_dir(final, lock=lock) as tmp:
+        files = _write_outputs_into(res, Path(tmp), report, final)
+    res.files = files
+    return res.files
+
+
+def _write_outputs_into(res: RunResult, out: Path, report: bool, final: Path) -> dict:
+    def moved(v):
+        return str(final / Path(v).relative_to(out))
+
     o = res.recipe.outputs
     files = {}
     w = res.wavelength_nm
@@ -518,12 +534,15 @@ def write_outputs(res: RunResult, out_dir, report: bool = True) -> dict:
     files["recipe"] = out / "recipe.toml"
     (out / "scalars.json").write_text(json.dumps(res.scalars, indent=2), encoding="utf-8")
     res.files = {k: str(v) for k, v in files.items()}
+    final_files = {k: moved(v) for k, v in res.files.items()}
     if report and o.report:
         from nmmm.recipes.report import result_section, write_report
 
-        p = write_report([result_section(res)], out / "report.html", title=res.recipe.name)
-        res.files["report"] = str(p)
-    return res.files
+        section = result_section(res)  # figures read from the temporary folder, paths told as final
+        section["files"] = dict(final_files)
+        p = write_report([section], out / "report.html", title=res.recipe.name)
+        final_files["report"] = moved(p)
+    return final_files
 
 
 def _write_netcdf(res, path):
@@ -628,14 +647,21 @@ def _plots(res, out):
     return files
 
 
-def run_recipe(path_or_text, out_dir, progress: bool = True, report: bool = True) -> RunResult:
-    """Load a recipe (TOML path or text), compute it and write all outputs into ``out_dir``."""
+def run_recipe(path_or_text, out_dir, progress: bool = True, report: bool = True, base_dir=None) -> RunResult:
+    """Load a recipe (TOML path or text), compute it and write all outputs into ``out_dir``.
+
+    ``base_dir``: the folder relative ``file`` paths are read from (and confined to) when the
+    recipe is given as text or a dict (default: the current folder)."""
     raw, source, base = read_toml(path_or_text)
+    base = base if base is not None else base_dir
     recipe = parse_recipe(raw, source, base)
     text = Path(path_or_text).read_text(encoding="utf-8") if source else (
         path_or_text if isinstance(path_or_text, str) else _dump_toml(raw))
-    res = compute(recipe, text, progress=progress)
-    write_outputs(res, out_dir, report=report)
+    from nmmm.atomic_io import folder_lock
+
+    with folder_lock(out_dir):  # a second run into this folder is refused before any physics
+        res = compute(recipe, text, progress=progress)
+        write_outputs(res, out_dir, report=report, lock=False)
     return res
 
 

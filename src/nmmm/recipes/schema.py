@@ -38,6 +38,8 @@ Exactly one of ``film``, ``plate``, ``thin_film``, ``effect`` is the macro objec
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import copy
 import difflib
 import math
@@ -59,6 +61,8 @@ __all__ = [
     "set_key",
     "get_key",
     "MACRO_OBJECTS",
+    "compound_file",
+    "files_outside_allowed",
 ]
 
 #: the tables of which exactly one is the macro object of a recipe
@@ -532,10 +536,65 @@ def _check_references(r: Recipe) -> None:
 # loading
 
 
+#: True while :func:`files_outside_allowed` is active: compound files may lie outside the recipe's folder
+_FILES_OUTSIDE = contextvars.ContextVar("nmmm_recipe_files_outside", default=False)
+
+#: deepest nesting of tables and arrays a recipe may have (a recipe needs < 10)
+MAX_DEPTH = 64
+
+
+@contextlib.contextmanager
+def files_outside_allowed(allowed: bool = True):
+    """Within the block, a compound's ``file`` may lie outside the recipe's folder (``--allow-outside-files``)."""
+    token = _FILES_OUTSIDE.set(bool(allowed))
+    try:
+        yield
+    finally:
+        _FILES_OUTSIDE.reset(token)
+
+
+def compound_file(name: str, file: str, base_dir=None) -> Path:
+    """The path of compound ``name``'s data ``file``, confined to the recipe's folder.
+
+    Relative paths are taken from ``base_dir`` (the recipe's folder; the current folder for a
+    recipe given as text). A path that leaves that folder (``..``, an absolute path, a symbolic
+    link pointing out) is a :class:`RecipeError` unless :func:`files_outside_allowed` is active,
+    so that a recipe from elsewhere cannot read ``/etc/passwd`` or ``/proc/self/environ``.
+    """
+    root = Path(base_dir) if base_dir else Path.cwd()
+    p = Path(file).expanduser()
+    p = p if p.is_absolute() else root / p
+    if not _FILES_OUTSIDE.get():
+        try:
+            inside = p.resolve().is_relative_to(root.resolve())
+        except (OSError, RuntimeError):
+            inside = False
+        if not inside:
+            raise RecipeError(f"compounds.{name}.file: {file!r} lies outside the recipe's folder {str(root)!r}; "
+                              "put the data file beside the recipe (a relative path inside its folder), or pass "
+                              "--allow-outside-files (files_outside_allowed() in Python) if you trust this recipe")
+    return p
+
+
+def _depth(obj, limit: int, level: int = 0) -> int:
+    if level > limit:
+        return level
+    if isinstance(obj, dict):
+        return max([_depth(v, limit, level + 1) for v in obj.values()], default=level)
+    if isinstance(obj, (list, tuple)):
+        return max([_depth(v, limit, level + 1) for v in obj], default=level)
+    return level
+
+
 def parse_recipe(data: dict, source: str = "", base_dir=None) -> Recipe:
     """Validate a raw recipe dict -> :class:`Recipe` (or raise :class:`RecipeError`)."""
     if not isinstance(data, dict):
         raise RecipeError(f"(top level): a recipe is a table of keys, got {type(data).__name__}")
+    if _depth(data, MAX_DEPTH) > MAX_DEPTH:
+        raise RecipeError(f"(top level): tables and arrays nested more than {MAX_DEPTH} deep; a recipe needs a "
+                          "few levels (compounds.NAME.params, levels[i].inclusions[j])")
+    if "base_dir" in data:
+        raise RecipeError("base_dir: not a recipe key (the recipe's folder is where its file lies); remove it")
     data = dict(data)
     if base_dir is not None:
         data["base_dir"] = str(base_dir)
@@ -544,6 +603,9 @@ def parse_recipe(data: dict, source: str = "", base_dir=None) -> Recipe:
     except ValidationError as exc:
         raise _from_validation_error(exc, source) from None
     _check_references(r)
+    for name, c in r.compounds.items():
+        if c.file is not None:
+            compound_file(name, c.file, r.base_dir)
     return r
 
 
@@ -555,13 +617,25 @@ def read_toml(path_or_text) -> tuple[dict, str, Path | None]:
     if p is not None:
         if not p.exists():
             raise RecipeError(f"(file): recipe file {str(p)!r} not found")
-        text, source, base = p.read_text(encoding="utf-8"), str(p), p.resolve().parent
+        if p.is_dir():
+            raise RecipeError(f"(file): {str(p)!r} is a folder; give the path of a recipe file (.toml)")
+        try:
+            text = p.read_bytes().decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise RecipeError(f"(file): recipe file {str(p)!r} is not UTF-8 text (byte {exc.start}); a recipe is "
+                              "a TOML text file saved as UTF-8") from None
+        except OSError as exc:
+            raise RecipeError(f"(file): cannot read recipe file {str(p)!r}: {exc.strerror or exc}") from None
+        source, base = str(p), p.resolve().parent
     else:
         text, source, base = path_or_text, "", None
     try:
         return tomllib.loads(text), source, base
     except tomllib.TOMLDecodeError as exc:
         raise RecipeError(f"(TOML syntax): {exc}" + (f"  [in {source}]" if source else "")) from None
+    except RecursionError:
+        raise RecipeError(f"(TOML syntax): tables or arrays nested too deep (more than {MAX_DEPTH} levels make no "
+                          "recipe)" + (f"  [in {source}]" if source else "")) from None
 
 
 def load_recipe(path_or_text) -> Recipe:
