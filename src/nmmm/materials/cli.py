@@ -16,14 +16,23 @@ def materials():
 @materials.command()
 @click.argument("text")
 def search(text):
-    """List database keys containing TEXT (e.g. Fe2O3)."""
-    from nmmm.materials.database import search as _search
+    """Find database entries by formula, name, synonym or phase (e.g. hematite, Fe2O3, rutile, PMMA):
+    each with its wavelength range, whether it covers 380–780 nm, and its source; and the binder table."""
+    from nmmm.materials.binders import find_binders
+    from nmmm.materials.database import search_entries
 
-    found = _search(text)
-    if not found:
-        raise click.ClickException(f"no key contains {text!r}")
-    for k in found:
-        click.echo(k)
+    found = search_entries(text)
+    binders = find_binders(text)
+    if not found and not binders:
+        raise click.ClickException(f"nothing matches {text!r} (searched keys, titles, comments, synonyms, phases "
+                                   "and the binder table); try a formula such as Fe2O3 or a mineral name")
+    for h in found:
+        lo, hi = h.range_nm
+        vis = "covers 380–780 nm" if h.covers_visible else "not all of 380–780 nm"
+        click.echo(f"{h.key}\t{lo:g}–{hi:g} nm\t{vis}\t{h.name}\t[{h.matched}]\tsource: {h.source or '-'}")
+    for b in binders:
+        where = f"{b.range_nm[0]:g}–{b.range_nm[1]:g} nm" if b.range_nm else "no model"
+        click.echo(f"binder {b.name}\t{where}\t{b.status}\t{b.chemistry}\tsource: {b.reference}")
 
 
 def _load(key):

