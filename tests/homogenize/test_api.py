@@ -268,3 +268,27 @@ def test_solves_leave_the_numba_thread_count_unchanged():
     for workers in (1, 2):
         fft_permittivity(lab, {0: 2.25, 1: -10 + 1j}, workers=workers)
         assert numba.get_num_threads() == before
+
+
+def test_auto_green_for_low_loss_metals_in_3d_is_reported():
+    """green=None picks the finite-difference operator for a 3-D cell with a low-loss metal and
+    says so in result.switches; lossy metals, 2-D cells and an explicit operator are left alone."""
+    lab = G.boolean_spheres(20, 0.2, 2.5, ndim=3, seed=1)
+    r = fft_permittivity(lab, {0: 2.25, 1: -50 + 2j}, dtype="complex64", tol=1e-5, directions=[0])
+    assert r.green == "willot2014"
+    assert r.switches[0]["what"] == "green" and r.switches[0]["to"] == "willot2014"
+    assert "low-loss metal" in r.switches[0]["reason"]
+    assert r.iterations[0] <= 500
+    for eps, ndim in (({0: 2.25, 1: -50 + 20j}, 3), ({0: 2.25, 1: -50 + 2j}, 2)):
+        cell = lab if ndim == 3 else lab[:, :, 0]
+        r2 = fft_permittivity(cell, eps, directions=[0])
+        assert r2.green == "willot2015" and r2.switches == ()
+    r3 = fft_permittivity(lab, {0: 2.25, 1: -50 + 2j}, green="willot2015", directions=[0], maxiter=2000)
+    assert r3.green == "willot2015" and r3.switches == ()
+
+
+def test_one_operator_for_the_whole_spectrum():
+    """The operator is chosen once for the spectrum (no jump in ε_eff(λ) between wavelengths)."""
+    lab = G.boolean_spheres(16, 0.2, 2, ndim=3, seed=2)
+    r = fft_permittivity(lab, {0: 2.25, 1: np.array([4.0 + 1j, -50 + 2j])}, directions=[0])
+    assert r.green == "willot2014" and set(r.metadata["green_used"].ravel()) == {"willot2014"}

@@ -64,6 +64,7 @@ class SolveOutcome:
     converged: bool = True
     solver: str = ""
     message: str = ""
+    green: str = ""  # the Green operator of the problem solved (set by fft_permittivity)
 
 
 def _local_threads(solve):
@@ -171,9 +172,19 @@ def _krylov_start(problem: Problem, tab, e0, keep_x: bool, name: str):
 
 
 # -- COCG -------------------------------------------------------------------------------------
+#: COCG stops as stalled when its best residual has not halved in this many projections (a
+#: finite-precision plateau, e.g. complex64 on a metal cell): the fallbacks then take over early.
+STALL_WINDOW = 300
+
+
 @_local_threads
-def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_x=True) -> SolveOutcome:
-    """Conjugate orthogonal conjugate gradient on Γ ε x = −Γ ε E0 (van der Vorst & Melissen 1990)."""
+def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_x=True,
+               stall_window: int | None = STALL_WINDOW, probe: tuple | None = None) -> SolveOutcome:
+    """Conjugate orthogonal conjugate gradient on Γ ε x = −Γ ε E0 (van der Vorst & Melissen 1990).
+
+    Stops early ("stalled") when the best relative residual has not halved over the last
+    ``stall_window`` projections (None: never), and, with ``probe = (n, r)``, when the best
+    residual is still above r after n projections (a convergence too slow to wait for)."""
     tab, start, r, nb, x, done = _krylov_start(problem, tab, e0, keep_x, "cocg")
     if done is not None:  # homogeneous medium: E = E0
         return done
@@ -216,6 +227,15 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
         if res <= tol:
             converged = True
             break
+        if probe is not None and it == probe[0] and min(history) > probe[1]:
+            message = (f"COCG slow: best relative residual {min(history):.3g} > {probe[1]:g} after "
+                       f"{probe[0]} projections (tol={tol:g})")
+            break
+        if stall_window and it > stall_window and it % 25 == 0:
+            if min(history[-stall_window:]) > 0.5 * min(history[:-stall_window]):
+                message = (f"COCG stalled: best relative residual {min(history):.3g} did not halve in the last "
+                           f"{stall_window} projections (tol={tol:g})")
+                break
         beta = rho_new / rho
         rho = rho_new
     if not converged and not message:
@@ -424,6 +444,7 @@ __all__ = [
     "SolveOutcome",
     "SOLVERS",
     "FALLBACKS",
+    "STALL_WINDOW",
     "solve_cocg",
     "solve_bicgstab",
     "solve_gmres",

@@ -1,0 +1,157 @@
+"""Convergence of the FFT solver's defaults on metal-dielectric cells (issue 22 item 4).
+
+For each cell (Boolean spheres, hard-core spheres, metal platelets "flakes"), grid and metal
+permittivity in a dielectric of ε = 2.25, the script runs ``fft_permittivity`` with its
+defaults (``green=None``: automatic operator, COCG, fallbacks on), complex64, tol 1e-5, one
+loading (x), and prints one table row: operator used, every automatic switch, projections,
+wall time and ε_xx. With ``--compare`` it also runs COCG with each Willot operator fixed
+(no fallback) to show what the automatic choice is choosing between.
+
+Usage::
+
+    python benchmarks/bench_fft_metals.py                       # 64³, all cells and metals
+    python benchmarks/bench_fft_metals.py --grids 64 128        # also 128³ (≈ 1-3 min per row)
+    python benchmarks/bench_fft_metals.py --compare --cases boolean --eps -50+2j
+    python benchmarks/bench_fft_metals.py --spectrum 64         # aluminium (Rakić), 81 λ, warm starts
+
+Cells: Boolean spheres p = 0.2, radius 5 voxels at 64³ (scaled with the grid); hard-core (RSA)
+spheres p = 0.2, same radius; flakes: discs of radius n/6, 2 voxels thick, lying flat, ~10 %.
+The machine's cores are shared: times are wall times of this run, iteration counts are not
+affected by the load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+import warnings
+
+import numpy as np
+
+from nmmm.errors import ConvergenceError
+from nmmm.homogenize import fft_permittivity
+from nmmm.homogenize import geometries as G
+
+METALS = (-50 + 1j, -50 + 2j, -50 + 5j, -44 + 13j)
+HOST = 2.25
+
+
+def flakes(n: int, seed: int = 0) -> np.ndarray:
+    """Metal platelets (discs of radius n/6, thickness 2 voxels) lying flat, ~10 % (periodic)."""
+    rng = np.random.default_rng(seed)
+    lab = np.zeros((n, n, n), np.uint8)
+    x = np.arange(n)
+    r = n / 6
+    while lab.mean() < 0.10:
+        c = rng.uniform(0, n, 3)
+        dx = (x - c[0] + n / 2) % n - n / 2
+        dy = (x - c[1] + n / 2) % n - n / 2
+        disc = (dx[:, None] ** 2 + dy[None, :] ** 2) < r * r
+        z0 = int(c[2])
+        for dz in range(2):
+            lab[:, :, (z0 + dz) % n] |= disc
+    return lab
+
+
+def cell(case: str, n: int) -> np.ndarray:
+    radius = 5.0 * n / 64
+    if case == "boolean":
+        return G.boolean_spheres(n, 0.2, radius, ndim=3, seed=1)
+    if case == "hardcore":
+        from nmmm.microstructure import hardcore_spheres
+
+        return np.asarray(hardcore_spheres((n, n, n), 1.0, radius, 0.2, seed=1).labels, dtype=np.uint8)
+    if case == "flakes":
+        return flakes(n)
+    raise SystemExit(f"unknown case {case!r}; choose boolean, hardcore, flakes")
+
+
+def run(lab, eps, **kw):
+    t = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            r = fft_permittivity(lab, eps, dtype="complex64", tol=1e-5, directions=[0], progress=False, **kw)
+        except ConvergenceError as e:
+            its = sum(len(h) - 1 for h in e.history.values())
+            return None, its, time.perf_counter() - t, "no convergence: " + str(e).split(": ", 1)[-1][:120]
+    return r, int(np.sum(r.iterations)), time.perf_counter() - t, ""
+
+
+def describe_switches(r) -> str:
+    out = []
+    for s in r.switches:
+        where = f" @λ{s['wavelength_index']}" if "wavelength_index" in s else ""
+        out.append(f"{s['from']}→{s['to']}{where}")
+    return "; ".join(out) or "-"
+
+
+def table(cases, grids, metals, compare: bool, maxiter: int):
+    print(f"\n| cell | grid | ε metal | operator | switches | projections | ≤ 500 | time (s) | ε_xx |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for n in grids:
+        for case in cases:
+            lab = cell(case, n)
+            frac = float(lab.mean())
+            for em in metals:
+                eps = {0: HOST, 1: em}
+                variants = [("default", {})]
+                if compare:
+                    variants += [(g, {"green": g, "fallback": False}) for g in ("willot2015", "willot2014")]
+                for label, kw in variants:
+                    r, its, wall, msg = run(lab, eps, maxiter=maxiter, **kw)
+                    if r is None:
+                        print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {label} | {msg} | >{its} | no | {wall:.1f} | - |",
+                              flush=True)
+                        continue
+                    op = r.green if label == "default" else label
+                    print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {op} | {describe_switches(r)} | {its} | "
+                          f"{'yes' if its <= 500 else 'no'} | {wall:.1f} | {complex(np.round(r.tensor[0, 0], 4))} |",
+                          flush=True)
+
+
+def spectrum(n: int, directions):
+    import nmmm.materials as M
+
+    w = np.linspace(380.0, 780.0, 81)
+    eps_al = M.get("main/Al/Rakic").eps(w)
+    lab = flakes(n)
+    print(f"\n## Aluminium (Rakić) flakes {n}³ ({lab.mean():.3f}), 81 wavelengths 380-780 nm, "
+          f"complex64, tol 1e-5, warm starts, loadings {directions}")
+    t = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = fft_permittivity(lab, {0: HOST, 1: eps_al}, dtype="complex64", tol=1e-5, directions=directions,
+                             progress=False)
+    wall = time.perf_counter() - t
+    its = np.asarray(r.iterations)
+    print(f"  total {wall:.1f} s, operator {r.green}, switches: {describe_switches(r)}")
+    print(f"  projections per solve: min {its.min()}, median {int(np.median(its))}, max {its.max()}, "
+          f"total {its.sum()}; {wall / its.sum() * 1e3:.1f} ms per projection")
+    for k in (0, 40, 80):
+        print(f"  λ = {w[k]:.0f} nm: ε_Al = {complex(np.round(eps_al[k], 2))}, ε_xx = "
+              f"{complex(np.round(r.tensor[k, 0, 0], 4))}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--grids", type=int, nargs="+", default=[64])
+    ap.add_argument("--cases", nargs="+", default=["boolean", "hardcore", "flakes"])
+    ap.add_argument("--eps", nargs="+", type=complex, default=list(METALS))
+    ap.add_argument("--compare", action="store_true", help="also each Willot operator alone (no fallback)")
+    ap.add_argument("--maxiter", type=int, default=2000)
+    ap.add_argument("--spectrum", type=int, metavar="N", help="run the 81-λ aluminium flake spectrum at N³")
+    ap.add_argument("--spectrum-loadings", type=int, nargs="+", default=[0, 1, 2])
+    args = ap.parse_args(argv)
+    print(f"# FFT homogenization of metal-dielectric cells (load average {os.getloadavg()[0]:.1f}, "
+          f"2 workers)")
+    if args.spectrum:
+        spectrum(args.spectrum, args.spectrum_loadings)
+    else:
+        table(args.cases, args.grids, args.eps, args.compare, args.maxiter)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
