@@ -30,15 +30,16 @@ def test_hg_as_legendre_series_matches_hg_path_and_iadpython(a, b, g, n, N):
     s = iad.Sample(a=a, b=b, g=g, n=n, n_above=n, n_below=n, quad_pts=N)
     ref = np.array(s.rt())
     # more moments than the quadrature uses: the series is cut at N and delta-M'd with f = g^N
-    gen = adding_doubling(a, b, None, n_slab=n, quad_pts=N, phase_moments=hg_legendre_moments(g, 60))
-    hg = adding_doubling(a, b, g, n_slab=n, quad_pts=N)
+    gen = adding_doubling(a, b, None, n_slab=n, quad_pts=N, phase_moments=hg_legendre_moments(g, 60), quadrature="prahl")
+    hg = adding_doubling(a, b, g, n_slab=n, quad_pts=N, quadrature="prahl")
     np.testing.assert_allclose(_fluxes(gen), ref, atol=2e-5)
     np.testing.assert_allclose(_fluxes(gen), _fluxes(hg), atol=1e-12)
 
 
 def test_per_element_phase_moments_broadcast():
     g = np.array([0.2, 0.6, 0.85])
-    gen = adding_doubling(0.95, 2.0, None, n_slab=1.5, phase_moments=hg_legendre_moments(g, 17))
+    gen = adding_doubling(0.95, 2.0, None, n_slab=1.5, phase_moments=hg_legendre_moments(g, 17), quad_pts=16,
+                         quadrature="prahl")  # iadpython's nodes
     s = iad.Sample(a=0.95, b=2.0, g=g, n=1.5, n_above=1.5, n_below=1.5, quad_pts=16)
     np.testing.assert_allclose(gen.reflectance, s.rt()[0], atol=2e-5)
 
@@ -74,7 +75,7 @@ def test_isotropic_semi_infinite_against_chandrasekhar(a):
 
 def test_isotropic_finite_slab_against_iadpython():
     s = iad.Sample(a=0.9, b=1.5, g=0.0, n=1.4, n_above=1.4, n_below=1.4, quad_pts=16)
-    r = adding_doubling(0.9, 1.5, None, n_slab=1.4, phase_moments=np.eye(1, 5)[0])
+    r = adding_doubling(0.9, 1.5, None, n_slab=1.4, phase_moments=np.eye(1, 5)[0], quad_pts=16, quadrature="prahl")
     np.testing.assert_allclose(_fluxes(r), s.rt(), atol=2e-5)
 
 

@@ -74,7 +74,7 @@ import numpy as np
 from scipy.special import expn
 
 from nmmm.errors import InvalidInputError
-from nmmm.layers.adding_doubling_method import adding_doubling
+from nmmm.layers.adding_doubling_method import AD_AUTO_QUAD_PTS, adding_doubling
 from nmmm.layers.distributions import SizeDistribution, percus_yevick_structure_factor, pigment_optics
 from nmmm.layers.kubelka_munk import km_coefficients, km_reflectance, saunderson, saunderson_k1, saunderson_k2
 from nmmm.layers.fresnel_equations import medium_nk
@@ -184,8 +184,10 @@ def film_coefficients(film: PaintFilm, wavelength_nm) -> FilmCoefficients:
         w,
         dependent_scattering_fraction=f if film.dependent_scattering else None,
     )
-    mu_a = f * opt.absorption_per_nm + (1 - f) * alpha_b
-    mu_s = f * opt.scattering_per_nm
+    # clipped: for a lossless pigment q_abs = q_ext − q_sca rounds to ±1e-17 (issue 16: a
+    # TiO2 white in a clear binder raised 'mu_a must be >= 0 (-3.8e-19)')
+    mu_a = np.maximum(f * opt.absorption_per_nm + (1 - f) * alpha_b, 0.0)
+    mu_s = np.maximum(f * opt.scattering_per_nm, 0.0)
     return FilmCoefficients(w, mu_a, mu_s, opt.g, n_host, alpha_b)
 
 
@@ -229,7 +231,7 @@ def mie_phase_moments(film: PaintFilm, wavelength_nm, n_moments: int = 17, n_ang
     return chi / chi[:, :1]
 
 
-def _km(film, co, specular, quad_pts=None, km_method="gate", phase_function=None):
+def _km(film, co, specular, quad_pts=None, km_method="gate", phase_function=None, quadrature=None):
     K, S = km_coefficients(co.mu_a_per_nm, co.mu_s_per_nm, co.g, method=km_method)
     rho = np.broadcast_to(np.asarray(film.substrate_reflectance, dtype=float), co.wavelength_nm.shape)
     Rb = km_reflectance(K, S, film.thickness_nm if np.isfinite(film.thickness_nm) else 1e15, rho)
@@ -244,14 +246,15 @@ def _km(film, co, specular, quad_pts=None, km_method="gate", phase_function=None
     return body
 
 
-def _ad(film, co, specular, quad_pts=16, km_method=None, phase_function="mie"):
+def _ad(film, co, specular, quad_pts=None, km_method=None, phase_function="mie", quadrature="snell"):
     mu_t = co.mu_a_per_nm + co.mu_s_per_nm
     with np.errstate(invalid="ignore", divide="ignore"):
         # clipped: a lossless pigment's q_abs = q_ext − q_sca can round to −1e-17
         albedo = np.clip(np.where(mu_t > 0, co.mu_s_per_nm / mu_t, 0.0), 0.0, 1.0)
     tau = mu_t * film.thickness_nm if np.isfinite(film.thickness_nm) else np.full_like(mu_t, np.inf)
     if phase_function == "mie":
-        g, chi = None, mie_phase_moments(film, co.wavelength_nm, n_moments=quad_pts + 1)
+        n_mom = (AD_AUTO_QUAD_PTS[-1] if quad_pts is None else quad_pts) + 1
+        g, chi = None, mie_phase_moments(film, co.wavelength_nm, n_moments=n_mom)
     else:
         g, chi = np.clip(co.g, -0.999, 0.999), None
     r = adding_doubling(
@@ -263,6 +266,7 @@ def _ad(film, co, specular, quad_pts=16, km_method=None, phase_function="mie"):
         clear_coat_optical_thickness=co.binder_absorption_per_nm * film.clear_coat_thickness_nm,
         quad_pts=quad_pts,
         phase_moments=chi,
+        quadrature=quadrature,
     )
     return r.reflectance if specular == "included" else r.body_reflectance
 
@@ -276,9 +280,10 @@ def paint_reflectance(
     wavelength_nm,
     solver: str = "km",
     specular: str = "included",
-    quad_pts: int = 16,
+    quad_pts: int | None = None,
     km_method: str = "gate",
     phase_function: str = "mie",
+    quadrature: str = "snell",
 ) -> PaintReflectance:
     """Reflectance spectrum of a paint film (0°/d, collimated normal illumination).
 
@@ -290,14 +295,17 @@ def paint_reflectance(
         Kubelka–Munk with Saunderson (fast) or adding–doubling (reference).
     specular : {"included", "excluded"}
         Whether the first-surface Fresnel reflection is counted (SCI / SCE).
-    quad_pts : int
-        Adding–doubling quadrature points per hemisphere.
+    quad_pts : int or None
+        Adding–doubling quadrature points per hemisphere (None: chosen for 1e-4 accuracy,
+        :func:`nmmm.layers.adding_doubling_method.auto_quad_pts`).
     km_method : str
         K, S mapping (:data:`nmmm.layers.kubelka_munk.KM_COEFFICIENT_METHODS`).
     phase_function : {"mie", "hg"}
         Adding–doubling only: the full Mie phase function (default; :func:`mie_phase_moments`,
         δ-M truncated — the reference) or Henyey–Greenstein with the Mie g (~1.5× faster;
         ΔE00 0.4–3.2 from the full phase function on the hematite grain-size series).
+    quadrature : {"snell", "prahl"}
+        Adding–doubling angular nodes (:data:`nmmm.layers.adding_doubling_method.AD_QUADRATURES`).
     """
     if solver not in PAINT_SOLVERS:
         raise InvalidInputError(f"unknown solver {solver!r}; choose from {sorted(PAINT_SOLVERS)}")
@@ -306,11 +314,13 @@ def paint_reflectance(
     if phase_function not in ("hg", "mie"):
         raise InvalidInputError(f"phase_function must be 'hg' or 'mie', got {phase_function!r}")
     co = film_coefficients(film, wavelength_nm)
-    R = PAINT_SOLVERS[solver](film, co, specular, quad_pts=quad_pts, km_method=km_method, phase_function=phase_function)
+    R = PAINT_SOLVERS[solver](film, co, specular, quad_pts=quad_pts, km_method=km_method, phase_function=phase_function,
+                              quadrature=quadrature)
     return PaintReflectance(co.wavelength_nm, np.asarray(R, dtype=float), solver, specular, co)
 
 
-def compare_km_ad(film: PaintFilm, wavelength_nm, specular: str = "included", quad_pts: int = 16, phase_function: str = "mie") -> dict:
+def compare_km_ad(film: PaintFilm, wavelength_nm, specular: str = "included", quad_pts: int | None = None,
+                  phase_function: str = "mie") -> dict:
     """Kubelka–Munk against adding–doubling on one film.
 
     Returns a dict with both spectra, ``max_abs_difference`` (and the wavelength where it
