@@ -29,6 +29,10 @@ from nmmm.layers.kubelka_munk import (  # noqa: E402,F401  (radiative transfer, 
 )
 from nmmm.layers.adding_doubling_method import ADResult, adding_doubling  # noqa: E402,F401  (radiative transfer, reference)
 from nmmm.layers.paint import PaintFilm, compare_km_ad, film_coefficients, paint_reflectance  # noqa: E402,F401  (paint film)
+from nmmm.layers.pigment_mixture import Component, MixtureOptics, mixture_optics, percus_yevick_mixture  # noqa: E402,F401  (multi-component films)
+from nmmm.layers.coat_stack import Coat, CoatStack, Substrate, stack_reflectance  # noqa: E402,F401  (coat stacks)
+from nmmm.layers.geometries import GEOMETRIES  # noqa: E402,F401  (instrument geometries)
+from nmmm.layers.formulation import contrast_ratio, formulator_quantities, tinting_strength  # noqa: E402,F401  (formulator)
 
 __all__ = [
     "brewster_angle", "critical_angle", "fresnel", "n_cos_theta",
@@ -40,4 +44,7 @@ __all__ = [
     "saunderson_k1", "saunderson_k2",
     "ADResult", "adding_doubling",
     "PaintFilm", "compare_km_ad", "film_coefficients", "paint_reflectance",
+    "Component", "MixtureOptics", "mixture_optics", "percus_yevick_mixture",
+    "Coat", "CoatStack", "Substrate", "stack_reflectance", "GEOMETRIES",
+    "contrast_ratio", "formulator_quantities", "tinting_strength",
 ]
