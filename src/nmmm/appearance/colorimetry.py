@@ -10,6 +10,7 @@ import warnings
 from nmmm.colour import (  # noqa: F401  (re-exported)
     MIN_CMF_COVERAGE,
     OBSERVERS,
+    as_spectral_distributions,
     delta_e2000,
     spectra_to_lab,
     spectra_to_srgb,
@@ -28,6 +29,7 @@ warnings.warn(
 __all__ = [
     "MIN_CMF_COVERAGE",
     "OBSERVERS",
+    "as_spectral_distributions",
     "delta_e2000",
     "spectra_to_lab",
     "spectra_to_srgb",

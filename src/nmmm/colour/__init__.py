@@ -2,7 +2,10 @@
 
 - :mod:`~nmmm.colour.illuminants` — illuminants (by name, data or values on the grid) and the
   standard observers with their aliases (``"2"``, ``"10"``).
-- :mod:`~nmmm.colour.tristimulus` — CIE weighting factors (ASTM E308), spectra → XYZ, white point.
+- :mod:`~nmmm.colour.tristimulus` — CIE weighting factors (ASTM E308 through colour-science),
+  spectra → XYZ, white point; :func:`as_spectral_distributions` (spectra as colour-science objects).
+  Every spectra entry point also takes a ``colour.SpectralDistribution`` /
+  ``MultiSpectralDistributions`` alone (``spectra_to_lab(sd)``).
 - :mod:`~nmmm.colour.cielab` — XYZ and spectra → CIELAB.
 - :mod:`~nmmm.colour.difference` — CIEDE2000 colour difference.
 - :mod:`~nmmm.colour.display` — XYZ and spectra → sRGB (CAT02 from the illuminant's white to D65).
@@ -15,11 +18,18 @@ from nmmm.colour.cielab import spectra_to_lab, xyz_to_lab
 from nmmm.colour.difference import delta_e2000
 from nmmm.colour.display import spectra_to_srgb, xyz_to_srgb
 from nmmm.colour.illuminants import OBSERVERS
-from nmmm.colour.tristimulus import MIN_CMF_COVERAGE, spectra_to_xyz, weighting_factors, white_point
+from nmmm.colour.tristimulus import (
+    MIN_CMF_COVERAGE,
+    as_spectral_distributions,
+    spectra_to_xyz,
+    weighting_factors,
+    white_point,
+)
 
 __all__ = [
     "MIN_CMF_COVERAGE",
     "OBSERVERS",
+    "as_spectral_distributions",
     "delta_e2000",
     "spectra_to_lab",
     "spectra_to_srgb",

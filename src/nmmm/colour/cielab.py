@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nmmm.colour.tristimulus import spectra_to_xyz, white_point
+from nmmm.colour.tristimulus import _split_spectral, spectra_to_xyz, white_point
 
 
 def xyz_to_lab(xyz, white_xyz) -> np.ndarray:
@@ -25,14 +25,16 @@ def xyz_to_lab(xyz, white_xyz) -> np.ndarray:
     return colour.XYZ_to_Lab(np.asarray(xyz) / white[1], colour.XYZ_to_xy(white / white[1]))
 
 
-def spectra_to_lab(wavelength_nm, values, illuminant="D65", observer="2") -> np.ndarray:
+def spectra_to_lab(wavelength_nm, values=None, illuminant="D65", observer="2") -> np.ndarray:
     """CIELAB (last axis L*, a*, b*) of one spectrum or a stack (last axis = wavelength),
-    white normalised to Y = 100 under the same illuminant.
+    white normalised to Y = 100 under the same illuminant; or of a colour-science
+    SpectralDistribution / MultiSpectralDistributions given alone (``spectra_to_lab(sd)``).
 
     >>> import numpy as np
     >>> w = np.arange(380, 781, 5.0)
     >>> np.round(spectra_to_lab(w, np.ones_like(w)), 6) + 0.0
     array([ 100.,    0.,    0.])
     """
+    wavelength_nm, values = _split_spectral(wavelength_nm, values)
     xyz = spectra_to_xyz(wavelength_nm, values, illuminant, observer)
     return xyz_to_lab(xyz, white_point(wavelength_nm, illuminant, observer))

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.colour._validation import _check_triplets
-from nmmm.colour.tristimulus import spectra_to_xyz, white_point
+from nmmm.colour.tristimulus import _split_spectral, spectra_to_xyz, white_point
 from nmmm.errors import InvalidInputError
 
 
@@ -41,7 +41,9 @@ def xyz_to_srgb(xyz, white_xyz=None, clip: bool = True, exposure: float = 1.0) -
     return np.clip(rgb, 0.0, 1.0) if clip else rgb
 
 
-def spectra_to_srgb(wavelength_nm, values, illuminant="D65", observer="2", exposure: float = 1.0) -> np.ndarray:
-    """Encoded sRGB in [0, 1] of reflectance / transmittance spectra seen under ``illuminant``."""
+def spectra_to_srgb(wavelength_nm, values=None, illuminant="D65", observer="2", exposure: float = 1.0) -> np.ndarray:
+    """Encoded sRGB in [0, 1] of reflectance / transmittance spectra seen under ``illuminant``
+    (arrays, or a colour-science SpectralDistribution / MultiSpectralDistributions given alone)."""
+    wavelength_nm, values = _split_spectral(wavelength_nm, values)
     xyz = spectra_to_xyz(wavelength_nm, values, illuminant, observer)
     return xyz_to_srgb(xyz, white_point(wavelength_nm, illuminant, observer), exposure=exposure)
