@@ -124,7 +124,7 @@ def demo(output_dir) -> dict:
         ax.imshow(np.sqrt(np.clip(img / vmax, 0, 1)), cmap="gray", vmin=0, vmax=1,
                   extent=(0, 450, 450, 0))  # square-root display stretch
         ax.set_title(f"{label}\n{m.density_per_mm2:.0f} sparkles/mm², S={m.sparkle_intensity:.3f}", fontsize=9)
-        ax.set_xlabel("µm")
+        ax.set(xlabel="x (µm)", ylabel="y (µm)")
     fig.suptitle(f"Grey metallic paint, 450 µm cell, {len(flakes)} Al flakes: glints at 45° illumination")
     fig.tight_layout()
     p = out / "grey_metallic_sparkle.png"

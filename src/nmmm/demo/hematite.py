@@ -212,7 +212,7 @@ def hematite_demo(output_dir, progress: bool = True) -> dict:
     for i, dgl in enumerate(GRAIN_DIAGONALS_NM):
         rgb = spectra_to_srgb(w, res[("grain", dgl, 0.07, False)][("white", "ad")])
         ax.scatter([dgl], [min(L_ad) - 4], s=250, marker="s", color=np.clip(rgb, 0, 1))
-    ax.set(xlabel="pseudo-cube large diagonal (nm)", ylabel="CIELAB (D65)", title="Bigger grains look darker")
+    ax.set(xlabel="pseudo-cube large diagonal (nm)", ylabel="CIELAB L*, a*, b* under D65 (1)", title="Bigger grains look darker")
     ax.legend(fontsize=8)
     axes[2].axhline(0, color="k", lw=0.5)
     axes[2].set(xlabel="wavelength (nm)", ylabel="R(KM) − R(AD)", title="Where Kubelka–Munk departs from adding–doubling")
@@ -240,7 +240,7 @@ def hematite_demo(output_dir, progress: bool = True) -> dict:
             ax.semilogx(one_minus_a, km - ad, color=c, ls=ls, label=f"g = {g_}, {method}")
             worst[(g_, method)] = float(np.max(np.abs(km - ad)))
     ax.axhline(0, color="k", lw=0.5)
-    ax.set(xlabel="1 − single-scattering albedo", ylabel="R(KM) − R(AD), opaque, SCE",
+    ax.set(xlabel="1 − single-scattering albedo (1)", ylabel="R(KM) − R(AD), opaque, SCE (1)",
            title="Kubelka–Munk + Saunderson vs adding–doubling (n = 1.55)")
     ax.legend(fontsize=7)
     fig.tight_layout()

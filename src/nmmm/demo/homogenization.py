@@ -138,8 +138,8 @@ def demo(output_dir) -> dict:
                 ax.plot(w, getattr(nk, part), style, color=c, ms=3,
                         label=f"{key.upper() if key != 'bruggeman' else 'Bruggeman'} {lab}" if key == "fft" or case["nominal"] == 0.10 else None)
     axes[0].plot(w, nk_host.real, "k-", lw=0.8, label="epoxy")
-    axes[0].set(xlabel="wavelength (nm)", ylabel="n", title="effective n: FFT (o), MG (--), Bruggeman (:)")
-    axes[1].set(xlabel="wavelength (nm)", ylabel="k", title="effective k")
+    axes[0].set(xlabel="wavelength (nm)", ylabel="n (1)", title="effective n: FFT (o), MG (--), Bruggeman (:)")
+    axes[1].set(xlabel="wavelength (nm)", ylabel="k (1)", title="effective k")
     axes[0].legend(fontsize=7)
     fig.tight_layout()
     p = out_dir / "homogenize_hematite_nk.png"
@@ -159,7 +159,7 @@ def demo(output_dir) -> dict:
         ax.plot(case["fft"][i550].real, case["fft"][i550].imag, "o", color=c, label=f"FFT {100 * case['fraction']:.1f} %")
         ax.plot(case["mg"][i550].real, case["mg"][i550].imag, "s", mfc="none", color=c)
         ax.plot(case["bruggeman"][i550].real, case["bruggeman"][i550].imag, "^", mfc="none", color=c)
-    ax.set(xlabel="Re ε", ylabel="Im ε", title=f"ε_eff at {w[i550]:.0f} nm: FFT (●), MG (□), Bruggeman (△)\n"
+    ax.set(xlabel="Re ε (1)", ylabel="Im ε (1)", title=f"ε_eff at {w[i550]:.0f} nm: FFT (●), MG (□), Bruggeman (△)\n"
            "shaded: Hashin-Shtrikman region (Bergman-Milton)")
     ax.legend(fontsize=7)
     fig.tight_layout()

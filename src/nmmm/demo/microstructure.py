@@ -58,6 +58,7 @@ def demo(output_dir, seed: int = 0) -> dict:
         ax.imshow(sec.labels.T, cmap="gray_r", extent=[0, box[0] / 1e3, box[1] / 1e3, 0])
         ax.set_title(f"hematite {p:.0%}: section (3-D fraction {m.volume_fraction():.3f})")
         ax.set_xlabel("x (µm)")
+        ax.set_ylabel("y (µm)")
         rows.append({"target_fraction": p, "voxel_fraction_3d": m.volume_fraction(),
                      "section_fraction": sec.volume_fraction(), "n_particles": len(ps)})
     axes[0].set_ylabel("y (µm)")
@@ -93,15 +94,16 @@ def demo(output_dir, seed: int = 0) -> dict:
     top = fm.labels.max(axis=2).T
     ax[0, 0].imshow(top, cmap="gray", extent=[0, 450, 450, 0])
     ax[0, 0].set_title(f"{len(dep)} aluminium flakes: top view (450 × 450 µm)")
+    ax[0, 0].set(xlabel="x (µm)", ylabel="y (µm)")
     cut = fm.labels[:, fm.shape[1] // 2, :].T
     ax[0, 1].imshow(cut, cmap="gray", origin="lower", aspect="auto", extent=[0, 450, 0, 20])
     ax[0, 1].set_title("vertical cut (x, z), substrate at z = 0")
     ax[0, 1].set_xlabel("x (µm)")
     ax[0, 1].set_ylabel("z (µm)")
     ax[1, 0].hist(dep.tilt_deg, bins=30, color="tab:blue")
-    ax[1, 0].set_xlabel("flake tilt (deg)")
+    ax[1, 0].set(xlabel="flake tilt (°)", ylabel="number of flakes (1)")
     ax[1, 1].hist(dep.depth_nm / 1e3, bins=30, color="tab:orange")
-    ax[1, 1].set_xlabel("flake depth below the top surface (µm)")
+    ax[1, 1].set(xlabel="flake depth below the top surface (µm)", ylabel="number of flakes (1)")
     fig.tight_layout()
     f3 = out / "microstructure_flakes.png"
     fig.savefig(f3, dpi=110)
@@ -124,7 +126,7 @@ def demo(output_dir, seed: int = 0) -> dict:
     ax.loglog(v / 1e9, fit.variances, "o", label="realisations")
     ax.loglog(v / 1e9, fit.variance(v), "-", label=f"D²(V) = K V^-{fit.alpha:.2f}")
     ax.set_xlabel("domain volume (µm³)")
-    ax.set_ylabel("variance of the volume fraction")
+    ax.set_ylabel("variance of the volume fraction (1)")
     ax.legend()
     fig.tight_layout()
     f4 = out / "microstructure_rve.png"

@@ -36,8 +36,8 @@ A medium is a database key (``material = "main/Si/Green-2008"``, see
     thickness_nm = {value = 500, min = 10, max = 3000}
     model = "cauchy"                   # n = A + B/λ² + C/λ⁴, λ in µm
     A = {value = 1.5, min = 1.2, max = 2.0}
-    B = {value = 0.005, min = -0.1, max = 0.2}
-    C = 0
+    B_um2 = {value = 0.005, min = -0.1, max = 0.2}   # B in µm² (or B_nm2 in nm²; plain B is µm²)
+    C_um4 = 0
 
     [fit]                              # optional: data window, evaluation budget
     wavelength_min_nm = 300
@@ -48,6 +48,13 @@ Oscillator models take ``oscillators = [{amplitude_ev2 = ..., center_ev = ..., b
 ...}, ...]``; Sellmeier takes lists ``B = [...]``, ``C = [...]``. Parameter names are
 ``<layer>.<parameter>`` (``epoxy.thickness_nm``, ``epoxy.A``, ``gold.oscillators[0].center_ev``,
 ``substrate.eps_inf``).
+
+Units of the dispersion coefficients are those of :data:`DISPERSION_PARAMETERS`: energies in eV,
+and — the exceptions to nm everywhere, as in the literature with λ in µm — Cauchy ``B`` in µm²
+and ``C`` in µm⁴, Sellmeier ``C`` in µm². Write the unit in the key to make it explicit
+(``B_um2``, ``C_um4``, ``C_um2``), or give nm-based values (``B_nm2``, ``C_nm4``, ``C_nm2``:
+converted, 1 µm² = 10⁶ nm²); see :data:`nmmm.materials.models.EXPLICIT_UNIT_KEYS`. The fitted
+parameter keeps the key's name and unit (``epoxy.B_nm2``, nm²).
 """
 
 from __future__ import annotations
@@ -101,7 +108,7 @@ def dispersion_material(model: str, values: dict, name: str | None = None):
     if key not in DISPERSION_PARAMETERS:
         raise InvalidInputError(f"unknown dispersion model {model!r}; choose one of {sorted(DISPERSION_PARAMETERS)}")
     nm = name or key
-    v = dict(values)
+    v = _canonical_flat(key, dict(values))
     if key == "constant":
         return M.Constant(nk=complex(v.get("n", 1.0), v.get("k", 0.0)), name=nm)
     kwargs = {}
@@ -124,6 +131,27 @@ def dispersion_material(model: str, values: dict, name: str | None = None):
     cls = {"cauchy": M.Cauchy, "sellmeier": M.Sellmeier, "drude": M.Drude, "lorentz": M.Lorentz,
            "drude_lorentz": M.DrudeLorentz, "tauc_lorentz": M.TaucLorentz}[key]
     return cls(name=nm, **kwargs)
+
+
+_ALIAS_UNITS = {"um2": "um^2", "um4": "um^4", "nm2": "nm^2", "nm4": "nm^4"}
+
+
+def _canonical_flat(model: str, values: dict) -> dict:
+    """Flat values with explicit-unit keys (``B_nm2``, ``C_nm2[1]``) converted to the model's
+    own keys and units (:data:`nmmm.materials.models.EXPLICIT_UNIT_KEYS`)."""
+    from nmmm.materials.models import EXPLICIT_UNIT_KEYS
+
+    aliases = EXPLICIT_UNIT_KEYS.get(model, {})
+    out = {}
+    for k, val in values.items():
+        base, sep, idx = k.partition("[")
+        if base in aliases:
+            target, factor = aliases[base]
+            k, val = target + sep + idx, float(val) * factor
+        if k in out:
+            raise InvalidInputError(f"{model}: {k} is given twice (once with its unit in the name); keep one")
+        out[k] = val
+    return out
 
 
 def roughness_material(below, void=1.0, fraction_void: float = 0.5, name: str = "roughness"):
@@ -217,7 +245,10 @@ class _Medium:
         key = str(model).lower().replace("-", "_")
         if key not in DISPERSION_PARAMETERS:
             raise RecipeError(f"{prefix}: unknown model {model!r}; choose one of {sorted(DISPERSION_PARAMETERS)}")
-        allowed = {p.rstrip("[]") for p in DISPERSION_PARAMETERS[key]}
+        from nmmm.materials.models import EXPLICIT_UNIT_KEYS
+
+        aliases = EXPLICIT_UNIT_KEYS.get(key, {})
+        allowed = {p.rstrip("[]") for p in DISPERSION_PARAMETERS[key]} | set(aliases)
         extra = set(spec) - allowed - {"model", "name", "thickness_nm", "roughness", "fraction_void"}
         if extra:
             raise RecipeError(f"{prefix}: unknown parameter(s) {sorted(extra)} for model {key!r}; it takes {sorted(allowed)}")
@@ -241,6 +272,18 @@ class _Medium:
                     params.append(_param(f"{prefix}.{base}[{i}]", item, unit))
             else:
                 params.append(_param(f"{prefix}.{base}", val, unit))
+        for alias, (target, _) in aliases.items():  # explicit units: B_um2, B_nm2, C_nm2[i], ...
+            if alias not in spec:
+                continue
+            twice = [k for k in spec if k == target or aliases.get(k, ("",))[0] == target]
+            if len(twice) > 1:
+                raise RecipeError(f"{prefix}: the coefficient {target} is given twice ({', '.join(twice)}); keep one")
+            unit = _ALIAS_UNITS[alias.split("_", 1)[1]]
+            val = spec[alias]
+            if isinstance(val, (list, tuple)):
+                params += [_param(f"{prefix}.{alias}[{i}]", item, unit) for i, item in enumerate(val)]
+            else:
+                params.append(_param(f"{prefix}.{alias}", val, unit))
         return cls(prefix, model=key, parameters=tuple(params))
 
     def build(self, values: dict):

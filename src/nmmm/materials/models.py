@@ -8,6 +8,15 @@
 - :class:`Lorentz` — sum of oscillators, ε = ε∞ + Σ Aⱼ/(E0ⱼ² − E² − iΓⱼE).
 - :class:`DrudeLorentz` — Drude plus Lorentz oscillators.
 - :class:`TaucLorentz` — amorphous semiconductors and dielectrics (Jellison–Modine).
+- :func:`canonical_parameters` — parameters written with explicit units (``B_um2``, ``C_um4``,
+  ``B_nm2``, ``C_nm4`` for Cauchy; ``C_um2``, ``C_nm2`` for Sellmeier; see
+  :data:`EXPLICIT_UNIT_KEYS`) -> the model's own keyword arguments, converted.
+
+Units. Cauchy's and Sellmeier's coefficients follow their literature, with λ in µm: Cauchy
+``B`` in µm², ``C`` in µm⁴; Sellmeier ``C`` in µm² — the exceptions to nmmm's "nm everywhere".
+A recipe or model file may say so in the key (``B_um2 = 0.0042``) or give nm-based values
+(``B_nm2 = 4200``, the same coefficient: 1 µm² = 10⁶ nm²); :func:`canonical_parameters`
+converts them, and refuses a coefficient given twice.
 
 Photon energies E, ωp, Γ, E0, Eg are in eV (E = 1239.84 eV·nm / λ). With the time
 dependence exp(−iωt) every absorbing term has Im ε ≥ 0. Every model evaluates over
@@ -285,3 +294,36 @@ MODELS = {
     "drude_lorentz": DrudeLorentz,
     "tauc_lorentz": TaucLorentz,
 }
+
+#: explicit-unit spellings of dispersion coefficients: model -> {key: (model keyword, factor to its unit)}
+EXPLICIT_UNIT_KEYS = {
+    "cauchy": {"B_um2": ("B", 1.0), "C_um4": ("C", 1.0), "B_nm2": ("B", 1e-6), "C_nm4": ("C", 1e-12)},
+    "sellmeier": {"C_um2": ("C", 1.0), "C_nm2": ("C", 1e-6)},
+}
+
+
+def canonical_parameters(model: str, params: dict) -> dict:
+    """``params`` with explicit-unit keys (:data:`EXPLICIT_UNIT_KEYS`) replaced by the model's
+    keyword arguments in its own units; list values (Sellmeier) are converted element-wise.
+
+    >>> canonical_parameters("cauchy", {"A": 1.5, "B_nm2": 4200.0, "C_um4": 0.0001})
+    {'A': 1.5, 'B': 0.0042, 'C': 0.0001}
+    """
+    aliases = EXPLICIT_UNIT_KEYS.get(str(model).lower().replace("-", "_"), {})
+    out = {}
+    for key, value in params.items():
+        if key not in aliases:
+            if key in out:
+                raise InvalidInputError(f"{model}: {key} is given twice (once with its unit in the name); keep one")
+            out[key] = value
+            continue
+        target, factor = aliases[key]
+        if target in out or target in params:
+            given = [k for k in params if k == target or aliases.get(k, ("",))[0] == target]
+            raise InvalidInputError(f"{model}: the coefficient {target} is given twice ({', '.join(given)}); keep one "
+                                    f"(units: {', '.join(f'{k}' for k, (t, _) in aliases.items() if t == target)})")
+        if isinstance(value, (list, tuple)):
+            out[target] = type(value)(float(v) * factor for v in value)
+        else:
+            out[target] = float(value) * factor
+    return out

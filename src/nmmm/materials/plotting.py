@@ -26,7 +26,7 @@ def plot_nk(materials, path, range_nm=None, title=None, n_points: int = 400):
         nk = m.nk(w)
         ax_n.plot(w, nk.real, label=m.name)
         ax_k.plot(w, nk.imag, label=m.name)
-    for ax, lab in ((ax_n, "n"), (ax_k, "k")):
+    for ax, lab in ((ax_n, "n (1)"), (ax_k, "k (1)")):
         ax.set_xlabel("wavelength (nm)")
         ax.set_ylabel(lab)
         ax.grid(alpha=0.3)

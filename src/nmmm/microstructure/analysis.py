@@ -580,13 +580,13 @@ class ImageAnalysis:
             a.axvline(2 * self.exclusion_radius_nm, color="tab:cyan", label="hard-core distance")
             a.legend(fontsize=8)
         a.set_xlabel("nearest-neighbour distance (nm)")
-        a.set_ylabel("count")
+        a.set_ylabel("number of pairs (1)")
         a = ax[1, 1]
         d = self.particles.equivalent_diameters_nm[~self.particles.on_border]
         if d.size:
             a.hist(d, bins=30, color="tab:green", alpha=0.8)
         a.set_xlabel("equivalent diameter (nm)")
-        a.set_ylabel("count")
+        a.set_ylabel("number of particles (1)")
         fig.suptitle(title or f"area fraction {self.fraction:.3f}")
         fig.tight_layout()
         if path is not None:

@@ -163,7 +163,7 @@ def comparison_section(res_a, res_b, rows, figures=(), names=None) -> dict:
                "items": [(f"CIELAB, illuminant {c['illuminant']}", f"L* {c['L']:.1f}   a* {c['a']:.1f}   b* {c['b']:.1f}")]}
         boxes.append(box)
     if boxes:
-        boxes[-1]["items"] += [(f"ΔE00 to {na}, illuminant {r['illuminant']}", f"{r['dE00']:.2f}") for r in main]
+        boxes[-1]["items"] += [(f"ΔE00 from the first, illuminant {r['illuminant']}", f"{r['dE00']:.2f}") for r in main]
     swatches = []
     for name, res in ((na, res_a), (nb, res_b)):
         swatches += [(f"{name} — illuminant {c['illuminant']}", c["srgb"], srgb_note(None, c["L"]))

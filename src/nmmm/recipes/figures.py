@@ -45,10 +45,29 @@ def _axis_shows_ticks(axis) -> bool:
     return any(t.get_visible() for t in labels) and len(axis.get_ticklocs()) > 0
 
 
+def _categorical(axis) -> bool:
+    """An axis whose ticks are words (``set_xticklabels``, categorical data), not numbers."""
+    from matplotlib.category import StrCategoryFormatter
+    from matplotlib.ticker import FixedFormatter
+
+    fmt = axis.get_major_formatter()
+    if isinstance(fmt, (FixedFormatter, StrCategoryFormatter)):
+        return True
+    locs = list(axis.get_ticklocs())
+    try:
+        fmt.set_locs(locs)
+        texts = [str(fmt(x, i)) for i, x in enumerate(locs)]
+    except Exception:  # noqa: BLE001 - a formatter that cannot say: treat as numbers
+        return False
+    words = [re.sub(r"\$[^$]*\$", "", s) for s in texts]  # drop mathtext numbers (10^-8)
+    return any(re.search(r"[A-Za-df-zµ]", w) for w in words)
+
+
 def missing_axis_labels(fig) -> list[str]:
     """Descriptions of the axes of ``fig`` that show tick labels but no axis label, or a label
-    without a unit in parentheses or brackets. Axes turned off (images), hidden axes (shared
-    ones whose tick labels are off) and 3-D axes' z are not checked."""
+    without a unit in parentheses or brackets (``(1)`` for a dimensionless quantity). Axes turned
+    off (images), axes without tick labels (shared ones, swatches), axes whose ticks are words
+    (categories) and 3-D axes' z are not checked."""
     out = []
     for i, ax in enumerate(fig.axes):
         if not ax.axison:
@@ -62,6 +81,8 @@ def missing_axis_labels(fig) -> list[str]:
             if not _axis_shows_ticks(axis):
                 continue
             text = axis.get_label_text().strip()
+            if _categorical(axis):  # named ticks (swatch rows, observers): they say what they are
+                continue
             if not text:
                 out.append(f"{name}: no {which} label")
             elif not _UNIT.search(text):

@@ -78,7 +78,10 @@ def _compound_material(name, spec, base_dir):
     if spec.uniaxial is not None:
         return M.uniaxial_mean(M.get(spec.uniaxial[0]), M.get(spec.uniaxial[1]), name=label)
     if spec.model is not None:
-        params = dict(spec.params)
+        try:  # explicit-unit keys (B_um2, B_nm2, ...) -> the model's own units
+            params = M.models.canonical_parameters(spec.model, dict(spec.params))
+        except NmmmError as exc:
+            raise RecipeError(f"compounds.{name}.params: {exc}") from None
         params.setdefault("name", label)
         try:
             return M.MODELS[spec.model](**params)

@@ -17,7 +17,11 @@ A recipe has these tables (units in the key names; lengths nm, angles degrees, f
 ``[compounds.NAME]`` exactly one source each: ``database`` (refractiveindex.info key),
     ``uniaxial = [ordinary_key, extraordinary_key]`` (mean index), ``model`` (a name of
     :data:`nmmm.materials.MODELS`) with ``params``, ``file`` (CSV or refractiveindex.info
-    YAML, relative to the recipe), or a constant ``n`` (and ``k``).
+    YAML, relative to the recipe), or a constant ``n`` (and ``k``). Model coefficients keep
+    their literature units, the exceptions to nm: Cauchy ``B`` in µm², ``C`` in µm⁴, Sellmeier
+    ``C`` in µm² — write ``B_um2``, ``C_um4``, ``C_um2`` to say so, or ``B_nm2``, ``C_nm4``,
+    ``C_nm2`` for nm-based values (:data:`nmmm.materials.models.EXPLICIT_UNIT_KEYS`); energies
+    in eV.
 ``[[levels]]``   nano -> micro: each level mixes ``inclusions`` (compound, fraction, shape,
     radius_nm) in a ``host`` by an effective-medium ``method`` (:mod:`nmmm.ema`) or by FFT
     homogenization of a random ``microstructure`` (``method = "fft"``); its result is a new
