@@ -60,7 +60,7 @@ def _categorical(axis) -> bool:
     except Exception:  # noqa: BLE001 - a formatter that cannot say: treat as numbers
         return False
     words = [re.sub(r"\$[^$]*\$", "", s) for s in texts]  # drop mathtext numbers (10^-8)
-    return any(re.search(r"[A-Za-df-zµ]", w) for w in words)
+    return any(re.search(r"[A-Za-df-zµ%]", w) for w in words)
 
 
 def missing_axis_labels(fig) -> list[str]:
