@@ -202,13 +202,25 @@ def _interface(u, na2, nb2):
     return Ra, T, Rb, T
 
 
+def _untrap(M):
+    """A node totally reflected on both sides of a lossless layer (u between its index and
+    both neighbours') is a trapped mode no outside light reaches: its row of I − R_a R_b is 0.
+    Put 1 on its diagonal, so its (zero) source gives zero flux instead of a singular solve."""
+    trapped = np.all(np.abs(M) < 1e-13, axis=-1)
+    if np.any(trapped):
+        M = M.copy()
+        b, i = np.nonzero(trapped)
+        M[b, i, i] = 1.0
+    return M
+
+
 def _combine(A, B):
     """Adding of A above B; each (R_top, T_down, R_bottom, T_up) of (B, N, N)."""
     Rat, Tad, Rab, Tau = A
     Rbt, Tbd, Rbb, Tbu = B
     I = np.eye(Rat.shape[-1])[None]
-    X = np.linalg.solve(I - Rab @ Rbt, Tad)
-    Y = np.linalg.solve(I - Rbt @ Rab, Tbu)
+    X = np.linalg.solve(_untrap(I - Rab @ Rbt), Tad)
+    Y = np.linalg.solve(_untrap(I - Rbt @ Rab), Tbu)
     return (Rat + Tau @ Rbt @ X, Tbd @ X, Rbb + Tbd @ Rab @ Y, Tau @ Y)
 
 

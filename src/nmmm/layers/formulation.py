@@ -112,7 +112,7 @@ def hiding_thickness_for(stack: CoatStack, wavelength_nm, target: float = 0.98, 
             hi = mid
         else:
             lo = mid
-        if hi / lo < 1.002:
+        if hi / lo < 1.01:  # 1 % in thickness
             break
     return float(hi)
 

@@ -51,6 +51,7 @@ class RunResult:
     timings_s: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)          # kind -> path (after write_outputs)
     spectral_images: dict = field(default_factory=dict)  # name -> nmmm.appearance.render.SpectralImage
+    summary: dict = field(default_factory=dict)        # formulator numbers for the report's summary box
 
     def to_xarray(self):
         """The run as a labelled xarray Dataset (:func:`nmmm.recipes.labelled.run_to_xarray`)."""
@@ -62,7 +63,6 @@ class RunResult:
         from nmmm.recipes.labelled import run_result_html
 
         return run_result_html(self)
-
 
 
 # --------------------------------------------------------------------------------------
@@ -168,7 +168,10 @@ def _grid(recipe):
 def _film(recipe, mats, w, res):
     from nmmm.layers.distributions import lognormal, monodisperse
     from nmmm.layers.paint import PaintFilm, paint_reflectance
+    from nmmm.recipes.paint_stack import add_formulator, paint_system
 
+    if recipe.pigments is not None or recipe.substrate is not None or recipe.measurement.geometry is not None:
+        return paint_system(recipe, mats, w, res)  # several pigments / a substrate / a geometry: the stack path
     pg, f = recipe.pigment, recipe.film
     d = pg.equivalent_diameter_nm()
     dist = monodisperse(d) if pg.size_spread == 1.0 else lognormal(d, pg.size_spread, n_nodes=pg.size_nodes)
@@ -200,6 +203,7 @@ def _film(recipe, mats, w, res):
                      f"geometric spread {pg.size_spread:g}) at volume fraction {pg.fraction:g} in {recipe.binder.compound}; "
                      f"film {f.thickness_nm / 1e3:g} µm, clear coat {f.clear_coat_nm / 1e3:g} µm, solver {f.solver}, "
                      f"0°/d, specular {f.specular}.")
+    add_formulator(recipe, mats, w, res)
 
 
 def _plate(recipe, mats, w, res):
@@ -384,7 +388,13 @@ def _stereo(recipe, brdf, w):
     return out
 
 
-_MACRO = {"film": _film, "plate": _plate, "thin_film": _thin_film, "effect": _effect}
+def _coats(recipe, mats, w, res):
+    from nmmm.recipes.paint_stack import paint_system
+
+    paint_system(recipe, mats, w, res)
+
+
+_MACRO = {"film": _film, "plate": _plate, "thin_film": _thin_film, "effect": _effect, "coats": _coats}
 
 
 # --------------------------------------------------------------------------------------
@@ -449,6 +459,19 @@ def scalar_results(res: RunResult) -> dict:
                 out[f"{q}_{row['illuminant']}"] = row[q]
     if res.primary:
         out["mean_primary"] = float(np.mean(res.spectra[res.primary]))
+    for k in ("contrast_ratio", "hiding_thickness_um", "hiding_spreading_rate_m2_per_L", "masstone_L", "masstone_a",
+              "masstone_b", "km_minus_ad_max_abs"):
+        if k in res.scalars:
+            out[k] = res.scalars[k]
+    if "contrast_ratio" in out:
+        from nmmm.recipes.paint_stack import geometry_of
+
+        res.summary.update({"contrast_ratio": out["contrast_ratio"], "geometry": geometry_of(res.recipe)})
+        if "hiding_thickness_um" in out:
+            res.summary.update({"hiding_thickness_um": out["hiding_thickness_um"],
+                                "spreading_rate_m2_per_L": out["hiding_spreading_rate_m2_per_L"]})
+        if "masstone_L" in out:
+            res.summary["masstone_lab"] = [out["masstone_L"], out["masstone_a"], out["masstone_b"]]
     return out
 
 

@@ -70,7 +70,7 @@ __all__ = [
 ]
 
 #: the tables of which exactly one is the macro object of a recipe
-MACRO_OBJECTS = ("film", "plate", "thin_film", "effect")
+MACRO_OBJECTS = ("film", "plate", "thin_film", "effect", "coats")
 
 
 def _fraction(v: float) -> float:
@@ -293,9 +293,54 @@ class Film(_Strict):
     thickness_nm: Positive = 20_000.0
     clear_coat_nm: NonNegative = 0.0
     substrate_reflectance: Fraction = 0.8
-    solver: Literal["km", "ad"] = "km"
+    #: adding–doubling by default (converged to 1e-4); "km" for Kubelka–Munk + Saunderson
+    solver: Literal["km", "ad"] = "ad"
     specular: Literal["included", "excluded"] = "excluded"
-    quad_pts: int = Field(default=16, ge=4, le=64)
+    #: adding–doubling points per hemisphere; None: chosen for 1e-4 accuracy
+    quad_pts: int | None = Field(default=None, ge=4, le=96)
+    #: critical PVC; above it the film holds air voids (default 0.64, random close packing)
+    cpvc: Annotated[float, Field(gt=0.0, lt=1.0)] | None = None
+
+
+class CoatSpec(_Strict):
+    """One coat of a stack (``[[coats]]``, top first)."""
+
+    name: str
+    thickness_nm: Positive
+    binder: str
+    pigments: list[Pigment] = Field(default_factory=list)
+    cpvc: Annotated[float, Field(gt=0.0, lt=1.0)] | None = None
+
+    @model_validator(mode="after")
+    def _sum(self):
+        total = sum(p.fraction for p in self.pigments)
+        if total > 1 + 1e-12:
+            raise ValueError(f"pigment fractions sum to {total:g} > 1 (fractions of the dry coat; their sum is the PVC)")
+        return self
+
+
+class SubstrateSpec(_Strict):
+    """Below the film or stack: exactly one of ``reflectance`` (number or list over the grid),
+    ``file`` (CSV wavelength_nm, reflectance), ``compound`` (n + ik) or ``kind`` (black/white)."""
+
+    reflectance: Fraction | list[Fraction] | None = None
+    file: str | None = None
+    compound: str | None = None
+    kind: Literal["black", "white"] | None = None
+
+    @model_validator(mode="after")
+    def _one(self):
+        given = [k for k in ("reflectance", "file", "compound", "kind") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(f"give exactly one of 'reflectance', 'file', 'compound' or 'kind'; got {given or 'none'}")
+        return self
+
+
+class Measurement(_Strict):
+    """The instrument: ``geometry`` among di:8, de:8, 0:d, 45a:0, 0:45a (CIE 15:2018 §4.2)."""
+
+    geometry: Literal["di:8", "de:8", "0:d", "45a:0", "0:45a"] | None = None
+    hiding: bool = True
 
 
 class Plate(_Strict):
@@ -401,8 +446,12 @@ class Recipe(_Strict):
     compounds: dict[str, Compound] = Field(default_factory=dict)
     levels: list[Level] = Field(default_factory=list)
     pigment: Pigment | None = None
+    pigments: list[Pigment] | None = None
     binder: Binder | None = None
     film: Film | None = None
+    coats: list[CoatSpec] | None = None
+    substrate: SubstrateSpec | None = None
+    measurement: Measurement = Field(default_factory=Measurement)
     plate: Plate | None = None
     thin_film: ThinFilm | None = None
     effect: Effect | None = None
@@ -512,9 +561,25 @@ def _check_references(r: Recipe) -> None:
             raise RecipeError(f"{path}: unknown compound {name!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
                               + f"; known: {sorted(known)}")
 
+    if r.pigment is not None and r.pigments is not None:
+        raise RecipeError("pigments: give [pigment] (one) or [[pigments]] (several), not both")
+    if r.pigments is not None:
+        total = sum(p.fraction for p in r.pigments)
+        if total > 1 + 1e-12:
+            raise RecipeError(f"pigments: the fractions sum to {total:g} > 1; they are volume fractions of the dry film "
+                              "and sum to the PVC (< 1)")
+        for j, p in enumerate(r.pigments):
+            need(f"pigments[{j}].compound", p.compound)
+    if r.coats is not None:
+        for i, c in enumerate(r.coats):
+            need(f"coats[{i}].binder", c.binder)
+            for j, p in enumerate(c.pigments):
+                need(f"coats[{i}].pigments[{j}].compound", p.compound)
+    if r.substrate is not None and r.substrate.compound is not None:
+        need("substrate.compound", r.substrate.compound)
     if r.film is not None:
-        if r.pigment is None:
-            raise RecipeError("pigment: required key is missing (a [film] needs a [pigment] table)")
+        if r.pigment is None and r.pigments is None:
+            raise RecipeError("pigment: required key is missing (a [film] needs a [pigment] table or [[pigments]])")
         if r.binder is None:
             raise RecipeError("binder: required key is missing (a [film] needs a [binder] table)")
     if r.pigment is not None:
