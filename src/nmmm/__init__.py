@@ -20,7 +20,17 @@ from nmmm.errors import (
     RecipeError,
 )
 
-__version__ = "0.1.0"
+def _read_version() -> str:
+    """The version from one place, pyproject.toml, through the installed package's metadata."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("nmmm")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "0+unknown"
+
+
+__version__ = _read_version()
 
 _SUBPACKAGES = ("errors", "spectra", "colour", "materials", "ema", "microstructure", "homogenize", "layers",
                 "ellipsometry", "appearance", "experiment", "recipes", "demo")
