@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.colour._validation import _check_triplets
+from nmmm.errors import InvalidInputError
 
 
 def delta_e2000(lab1, lab2) -> np.ndarray:
@@ -21,4 +22,8 @@ def delta_e2000(lab1, lab2) -> np.ndarray:
     import colour
 
     lab1, lab2 = _check_triplets(lab1, "lab1"), _check_triplets(lab2, "lab2")
+    for lab, name in ((lab1, "lab1"), (lab2, "lab2")):
+        if np.any(lab[..., 0] < -1e-6):
+            raise InvalidInputError(f"{name} has L* = {float(lab[..., 0].min()):g} < 0; CIELAB lightness is >= 0 "
+                                    "(L* = 0 is black), check the coordinates or their order (L*, a*, b*)")
     return colour.delta_E(lab1, lab2, method="CIE 2000")

@@ -92,7 +92,7 @@ def pseudo_dielectric_material(data, angle_deg=None, name: str = "pseudo-dielect
 
     d = data.at_angle(angle_deg)
     eps = pseudo_dielectric(d.psi_deg, d.delta_deg, d.angle_deg, eps_ambient)
-    nk = eps_to_nk(eps)
+    nk = eps_to_nk(eps, allow_gain=True)  # the sign is checked here, with the wavelength and Delta
     if np.any(nk.imag < 0):
         i = int(np.flatnonzero(nk.imag < 0)[0])
         raise InvalidInputError(

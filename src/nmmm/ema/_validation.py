@@ -28,6 +28,26 @@ def as_eps(eps, name: str = "eps") -> np.ndarray:
     return e
 
 
+def as_host_eps(eps, name: str = "eps_host") -> np.ndarray:
+    """:func:`as_eps` for a host (matrix): ε = 0 is refused, since every mixing rule divides by
+    it (Maxwell Garnett returns 0, Bruggeman an arbitrary root, instead of an error)."""
+    e = as_eps(eps, name)
+    if np.any(np.abs(e) < 1e-12):
+        raise InvalidInputError(f"{name} = 0 (|eps| < 1e-12): a host medium has eps != 0 (vacuum and air have "
+                                "eps = 1); at a metal's epsilon-near-zero wavelength use a full-wave model, not an EMA")
+    return e
+
+
+def broadcast_inputs(**arrays) -> None:
+    """Refuse inputs whose shapes do not broadcast, naming them (instead of numpy's ValueError)."""
+    try:
+        np.broadcast_shapes(*(np.shape(a) for a in arrays.values()))
+    except ValueError:
+        shapes = ", ".join(f"{k} {np.shape(v)}" for k, v in arrays.items())
+        raise InvalidInputError(f"shapes do not broadcast: {shapes}; give arrays of one shape (or scalars), "
+                                "e.g. one value per wavelength") from None
+
+
 def as_fraction(fraction, name: str = "fraction") -> np.ndarray:
     """A volume fraction array in [0, 1] (not percent)."""
     return check_fraction(fraction, name)

@@ -45,7 +45,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from nmmm.ema._validation import as_eps, as_fraction, passive
+from nmmm.ema._validation import as_eps, as_fraction, as_host_eps, broadcast_inputs, passive
 from nmmm.errors import InvalidInputError
 
 #: Relative loss added to every phase to select the physical root.
@@ -335,9 +335,10 @@ def bruggeman(eps_phases, fractions, fraction=None, shapes=None) -> np.ndarray:
     """
     if fraction is not None:
         fraction = as_fraction(fraction)
+        ei, em = as_eps(eps_phases, "eps_inclusion"), as_host_eps(fractions, "eps_host")
+        broadcast_inputs(eps_inclusion=ei, eps_host=em, fraction=fraction)
         if shapes is None:  # two spherical phases: the quadratic in closed form (same root rule)
-            return _bruggeman_two_spheres(as_eps(eps_phases, "eps_inclusion"), as_eps(fractions, "eps_host"),
-                                          fraction)
+            return _bruggeman_two_spheres(ei, em, fraction)
         eps_phases, fractions = [eps_phases, fractions], [fraction, 1 - fraction]
     e, f = _phases(eps_phases, fractions)
     g_phase, g_L, g_mult = _groups(e.shape[-1], shapes)

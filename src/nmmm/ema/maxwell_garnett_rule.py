@@ -36,7 +36,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from nmmm.ema._validation import as_depolarization, as_eps, as_fraction, check_orientation, passive
+from nmmm.ema._validation import (as_depolarization, as_eps, as_fraction, as_host_eps, broadcast_inputs,
+                                  check_orientation, passive)
 from nmmm.errors import InvalidInputError
 
 
@@ -69,8 +70,9 @@ def maxwell_garnett(eps_inclusion, eps_host, fraction) -> np.ndarray:
     1.956522
     """
     ei = as_eps(eps_inclusion, "eps_inclusion")
-    em = as_eps(eps_host, "eps_host")
+    em = as_host_eps(eps_host, "eps_host")
     p = as_fraction(fraction)
+    broadcast_inputs(eps_inclusion=ei, eps_host=em, fraction=p)
     return passive(em * ((1 + 2 * p) * ei + 2 * (1 - p) * em) / ((1 - p) * ei + (2 + p) * em))
 
 

@@ -380,6 +380,8 @@ def _mie_scalar(n_particle, n_medium, diameter_nm, wavelength_nm):
             and 0 < npc.real < math.inf and 0 <= npc.imag < math.inf):
         return None
     x = math.pi * d * nm / w
+    if x > MIE_MAX_SIZE_PARAMETER:
+        return None  # the general path refuses it with the estimate
     qext, qsca, qback, g = _mie_single(npc / nm, x)
     f = np.float64
     # the frozen dataclass's generated __init__ (12 object.__setattr__ calls) would cost more
@@ -597,13 +599,56 @@ def mie_multilayer(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg=N
     return _mie_layers(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg, names)
 
 
+#: largest size parameter x = pi d n_medium / lambda accepted (the series needs ~x terms; x = 1e6 is a
+#: 120 µm sphere in the visible, already a geometric-optics particle, which nmmm does not model)
+MIE_MAX_SIZE_PARAMETER = 1.0e6
+#: largest total number of series terms (sum over the grid of x + 4 x^(1/3) + 2) one call may spend (~20 s);
+#: raise it (nmmm.layers.mie_scattering.MIE_MAX_TERMS = ...) for a long batch you mean to wait for
+MIE_MAX_TERMS = 3.0e8
+#: measured series terms per second of the kernel (200 x 1000 grid, x up to 40: 1.4e7 on this machine)
+_TERMS_PER_S = 1.4e7
+
+
+def _check_work(shape, w, nm, d_outer) -> None:
+    """Refuse a size parameter beyond the series' domain, or a grid whose estimated work exceeds
+    :data:`MIE_MAX_TERMS`, with the estimate (terms, time, memory) and the setting that raises it."""
+    xmax = float(np.max(np.pi * np.asarray(d_outer) * np.max(nm) / np.min(w)))
+    if xmax > MIE_MAX_SIZE_PARAMETER:
+        raise InvalidInputError(
+            f"size parameter x = pi d n / lambda reaches {xmax:.3g} (diameter up to {float(np.max(d_outer)):.4g} nm), "
+            f"above {MIE_MAX_SIZE_PARAMETER:.0e}: the Mie series would need ~{xmax:.2g} terms per particle; a sphere "
+            "that large is a geometric-optics scatterer (Q_ext -> 2), not a pigment for Mie theory: give the "
+            "diameter in nm (1 µm = 1000 nm) or a smaller particle")
+    npts = int(np.prod(shape)) if len(shape) else 1
+    if npts < 100_000:
+        return
+    # the terms over the grid from a sample of x (exact enough for an estimate)
+    x = np.broadcast_to(np.pi * np.asarray(d_outer) * nm / w, shape).ravel()
+    sample = x[:: max(1, x.size // 100_000)]
+    terms = float(np.mean(sample + 4 * np.cbrt(sample) + 2)) * npts
+    if terms > MIE_MAX_TERMS:
+        raise InvalidInputError(
+            f"this Mie grid of {npts:,} particle-wavelength points needs ~{terms:.2g} series terms (~"
+            f"{terms / _TERMS_PER_S / 60:.0f} min on one core, ~{npts * 120 / 1e9:.1f} GB of results), above the limit "
+            f"MIE_MAX_TERMS = {MIE_MAX_TERMS:.0e}: use a coarser wavelength or diameter grid, or raise "
+            "nmmm.layers.mie_scattering.MIE_MAX_TERMS if you mean to wait")
+
+
 def _mie_layers(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg, names) -> MieResult:
     """Validate (naming each argument as the caller's signature does) and run the kernel."""
     w = as_wavelength_nm(wavelength_nm)
     idx = [_particle_index(n, w, nn) for n, (nn, _) in zip(n_layers, names)]
     ds = [check_positive(d, dn) for d, (_, dn) in zip(diameters_nm, names)]
     nm = _medium_index(n_medium, w)
-    shape = np.broadcast_shapes(w.shape, nm.shape, *(i.shape for i in idx), *(d.shape for d in ds))
+    try:
+        shape = np.broadcast_shapes(w.shape, nm.shape, *(i.shape for i in idx), *(d.shape for d in ds))
+    except ValueError:
+        told = [("wavelength_nm", w), ("n_medium", nm)] + [(nn, i) for i, (nn, _) in zip(idx, names)] + \
+            [(dn, d) for d, (_, dn) in zip(ds, names)]
+        raise InvalidInputError("shapes do not broadcast: " + ", ".join(f"{k} {v.shape}" for k, v in told) +
+                                "; for a wavelength x diameter grid give wavelength_nm[:, None] (and n_particle[:, None])"
+                                " and diameter_nm[None, :]") from None
+    _check_work(shape, w, nm, ds[-1])
     L = len(idx)
     wb = np.broadcast_to(w, shape).ravel()
     nmb = np.broadcast_to(nm, shape).ravel()

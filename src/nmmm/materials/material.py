@@ -32,18 +32,41 @@ HC_EV_NM = 1239.841984
 FLOAT32_RANGE_RTOL = 4 * float(np.finfo(np.float32).eps)
 
 
-def nk_to_eps(nk):
-    """ε = ε1 + iε2 = (n + ik)², i.e. ε1 = n² − k², ε2 = 2nk."""
+#: relative tolerance below zero on k or ε2 still taken as rounding (not as gain)
+GAIN_RTOL = 1e-9
+
+
+def _refuse_gain(x, part, name: str, what: str) -> None:
+    neg = part < -GAIN_RTOL * np.maximum(np.abs(x), 1e-300)
+    if np.any(neg):
+        i = int(np.flatnonzero(np.ravel(neg))[0])
+        raise InvalidInputError(
+            f"{name} = {complex(np.ravel(x)[i]):.6g} at flat index {i} has {what} < 0 (gain); an absorbing medium "
+            f"has {what} >= 0 (the convention n + ik, eps2 >= 0): check the sign convention of the data "
+            "(exp(-iwt) here), or pass allow_gain=True for an intermediate quantity")
+
+
+def nk_to_eps(nk, allow_gain: bool = False):
+    """ε = ε1 + iε2 = (n + ik)², i.e. ε1 = n² − k², ε2 = 2nk.
+
+    ``k < 0`` (gain, or the other sign convention) is an :class:`InvalidInputError` unless
+    ``allow_gain``."""
     nk = np.asarray(nk, dtype=complex)
+    if not allow_gain:
+        _refuse_gain(nk, nk.imag, "n + ik", "k")
     return nk * nk
 
 
-def eps_to_nk(eps):
+def eps_to_nk(eps, allow_gain: bool = False):
     """n + ik from ε, eq. (1) of the seed paper (Born & Wolf):
 
     n = sqrt((ε1 + |ε|)/2), k = sqrt((−ε1 + |ε|)/2), the root with n ≥ 0, k ≥ 0 for ε2 ≥ 0.
+    ``ε2 < 0`` is an :class:`InvalidInputError` unless ``allow_gain`` (then k < 0 keeps the sign
+    of ε2, for intermediate quantities such as a pseudo-dielectric function).
     """
     eps = np.asarray(eps, dtype=complex)
+    if not allow_gain:
+        _refuse_gain(eps, eps.imag, "eps", "eps2")
     mod = np.abs(eps)
     n = np.sqrt(np.maximum((eps.real + mod) / 2, 0.0))
     k = np.sqrt(np.maximum((-eps.real + mod) / 2, 0.0))
