@@ -39,6 +39,8 @@ OPTIONAL_IMPORTS = {
     "mitsuba": "the Mitsuba 3 plugins (extra nmmm[mitsuba]); imported inside require_mitsuba(), which "
                "raises MitsubaUnavailableError with the install hint",
     "drjit": "comes with mitsuba; imported only inside the Mitsuba plugin functions",
+    "zarr": "extra nmmm[zarr]; imported only inside recipes.labelled.write_sweep_cube for sweeps of 1000+ "
+            "points, which warns and keeps results.nc (the same cube) when zarr is missing",
 }
 
 #: always blocked, even where the metadata walk misses them (e.g. an extra that is not installed here)
