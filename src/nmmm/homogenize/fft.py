@@ -412,7 +412,7 @@ def fft_permittivity(
                 for i, (name, prob) in enumerate(order):
                     x_start = x0 if prob is problem else None
                     extra = {}
-                    if i == 0 and len(order) > 1 and order[1][1] is not problem:
+                    if i == 0 and op.name == AUTO_GREEN and len(order) > 1 and order[1][1] is not problem:
                         extra["probe"] = PROBE  # auto mode: leave a slow operator early
                     out = SOLVERS[name](prob, tab, e0, x0=x_start, tol=tol, maxiter=maxiter, keep_x=keep_x, **extra)
                     out.green = prob.op.name
