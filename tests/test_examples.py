@@ -108,7 +108,7 @@ def test_render_object_command_without_mitsuba_exits_2_with_one_line(mode, tmp_p
     proc, out = _run([sys.executable, "-c", _SIMULATE, mode, "cli", "render", "object", "out/sphere",
                       "--width", "16", "--height", "16", "--spp", "1"], tmp_path)
     assert proc.returncode == 2, out
-    assert _one_install_line(out).startswith("nmmm render object: ")
+    assert _one_install_line(out).startswith("error: nmmm render object: ")  # the one CLI voice (issue 21)
 
 
 # --------------------------------------------------------------------------------------
