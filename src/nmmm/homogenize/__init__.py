@@ -19,7 +19,8 @@ Method in one paragraph: the Galerkin (projection) form of the periodic Lippmann
 equation, Γ ε x = −Γ ε E0, is complex symmetric and solved by COCG without a reference
 medium (robust for metals, ε ≈ −50 + 20i next to 2.25); BiCGStab and GMRES are fallbacks,
 Eyre-Milton and Moulinec-Suquet are kept as references. Γ is stored as per-axis 1-D symbol
-factors (spectral, Willot 2014 finite-difference, Willot 2015 rotated — the default) and
+factors (spectral, Willot 2014 finite-difference, Willot 2015 rotated; ``green=None`` picks
+the rotated one, or the finite-difference one for 3-D low-loss metal cells, and reports it) and
 evaluated on the fly in fused Numba kernels; FFTs are scipy.fft in place with 2 workers,
 complex128 or complex64.
 
@@ -35,8 +36,10 @@ Known limitations
   off by 2-4 % at 32²-128² with the spectral and rotated operators, 11-24 % with
   ``green="willot2014"``). Dielectric and strongly metallic (−50 + 20i) contrasts are fine.
 - Quasi-static only: features must be small against λ/n (a warning says when not).
-- No GPU backend yet (the kernels are NumPy/Numba; a CuPy port would replace scipy.fft and
+- No GPU backend yet (design in docs/gpu-backend.md: a CuPy port would replace scipy.fft and
   the four kernels).
+- Low-loss metal flakes (ε ≈ −50 + 1..2i, 10 % platelets) do not reach tol 1e-5 in complex64
+  with any operator or solver (benchmarks/bench_fft_metals.py); use complex128 or a looser tol.
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
