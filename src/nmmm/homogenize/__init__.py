@@ -39,7 +39,7 @@ Known limitations
 - No GPU backend yet (design in docs/gpu-backend.md: a CuPy port would replace scipy.fft and
   the four kernels).
 - Low-loss metal flakes (ε ≈ −50 + 1..2i, 10 % platelets) do not reach tol 1e-5 in complex64
-  with any operator or solver (benchmarks/bench_fft_metals.py); use complex128 or a looser tol.
+  with any operator or solver (benchmarks/bench_fft_metals.py; complex128 not yet measured).
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
