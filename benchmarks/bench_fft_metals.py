@@ -34,25 +34,10 @@ from nmmm.errors import ConvergenceError
 from nmmm.homogenize import fft_permittivity
 from nmmm.homogenize import geometries as G
 
+from bench_homogenize import flakes  # the same flake deposit the homogenize benchmark times (run from benchmarks/)
+
 METALS = (-50 + 1j, -50 + 2j, -50 + 5j, -44 + 13j)
 HOST = 2.25
-
-
-def flakes(n: int, seed: int = 0) -> np.ndarray:
-    """Metal platelets (discs of radius n/6, thickness 2 voxels) lying flat, ~10 % (periodic)."""
-    rng = np.random.default_rng(seed)
-    lab = np.zeros((n, n, n), np.uint8)
-    x = np.arange(n)
-    r = n / 6
-    while lab.mean() < 0.10:
-        c = rng.uniform(0, n, 3)
-        dx = (x - c[0] + n / 2) % n - n / 2
-        dy = (x - c[1] + n / 2) % n - n / 2
-        disc = (dx[:, None] ** 2 + dy[None, :] ** 2) < r * r
-        z0 = int(c[2])
-        for dz in range(2):
-            lab[:, :, (z0 + dz) % n] |= disc
-    return lab
 
 
 def cell(case: str, n: int) -> np.ndarray:
