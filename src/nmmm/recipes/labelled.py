@@ -61,12 +61,12 @@ _DIMENSIONLESS = ("fraction", "reflectance", "transmittance", "spread", "index",
 
 def units_of_key(key: str) -> str | None:
     """The unit a key's name states: ``pigment.diameter_nm`` → ``"nm"``, ``pigment.fraction`` → ``"1"``,
-    ``L_D65`` → ``"1"`` (CIELAB is dimensionless); ``None`` when the name states none."""
+    ``L_D65`` and ``masstone_L`` → ``"1"`` (CIELAB is dimensionless); ``None`` when the name states none."""
     last = key.rsplit(".", 1)[-1]
     for suffix, unit in _SUFFIX_UNITS:
         if last.endswith(suffix):
             return unit
-    if re.match(r"^[Lab]_", last) or any(last.endswith(d) for d in _DIMENSIONLESS):
+    if re.match(r"^(?:[Lab]_|masstone_[Lab]$)", last) or any(last.endswith(d) for d in _DIMENSIONLESS):
         return "1"
     return None
 
