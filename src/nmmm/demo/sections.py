@@ -26,6 +26,7 @@ HOOKS = (
     ("Gold-ruby glass in depth (nmmm.ema)", "nmmm.demo.gold_ruby:gold_ruby_demo"),
     ("Hematite paint in depth (nmmm.layers)", "nmmm.demo.hematite:hematite_demo"),
     ("Interference pigments in depth (nmmm.layers)", "nmmm.demo.interference:demo"),
+    ("Real paint systems: tints, whites, coats (nmmm.layers)", "nmmm.demo.paint_systems:demo"),
     ("Microstructures (nmmm.microstructure)", "nmmm.demo.microstructure:demo"),
     ("FFT homogenization (nmmm.homogenize)", "nmmm.demo.homogenization:demo"),
     ("Ellipsometry (nmmm.ellipsometry)", "nmmm.demo.ellipsometry:demo"),
