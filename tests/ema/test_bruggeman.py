@@ -243,3 +243,36 @@ def test_two_sphere_fast_path_where_the_principal_root_is_wrong():
     fast = _bruggeman_two_spheres(e1, e2, p)
     np.testing.assert_allclose(fast, other, rtol=1e-12)
     np.testing.assert_allclose(fast, _general(e1, e2, p), rtol=1e-10)
+
+
+def test_two_sphere_closed_form_against_a_50_digit_reference():
+    """Independent reference (mpmath, 50 digits): both roots of 2ε² − bε − ε₁ε₂ = 0 with every
+    phase given the loss i·1e-30 (limiting absorption taken literally), the one with the larger
+    Im kept. Cases: random lossy phases, metals in dielectrics, lossless dielectrics and
+    lossless metals (ties broken only by the perturbation), and a root of 1e-6 beside one of
+    −0.35 (b and the square root cancel to 6 digits: formed from the product of the roots)."""
+    mp = pytest.importorskip("mpmath")
+    from nmmm.ema.bruggeman_rule import _bruggeman_two_spheres
+
+    mp.mp.dps = 50
+    rng = np.random.default_rng(23)
+    ea, eb = random_eps(rng, 120), random_eps(rng, 120)
+    p = rng.uniform(0, 1, 120)
+    cases = list(zip(ea, eb, p))
+    cases += [(m, d, f) for m in (-50 + 1j, -44 + 13j, -5 + 0j, -0.5 + 0j) for d in (2.25, 1.0 + 0j, 12.0)
+              for f in (0.0, 0.1, 1 / 3, 0.5, 0.9, 1.0)]
+    cases += [(a, b, f) for a in (1.0, 4.0, 16.0) for b in (2.25, 9.0) for f in (0.05, 0.5, 0.95)]
+    cases += [(1e-6 + 0j, 1.0 + 0j, 0.9), (1e-6 + 1e-9j, 1.0 + 0j, 0.9)]
+    e1 = np.array([c[0] for c in cases], complex)
+    e2 = np.array([c[1] for c in cases], complex)
+    f = np.array([c[2] for c in cases], float)
+    out = _bruggeman_two_spheres(e1, e2, f)
+    tiny = mp.mpc(0, mp.mpf("1e-30"))
+    for k, (a, b, q) in enumerate(zip(e1, e2, f)):
+        a, b, q = mp.mpc(a.real, a.imag) + tiny, mp.mpc(b.real, b.imag) + tiny, mp.mpf(float(q))
+        bb = (3 * q - 1) * a + (2 - 3 * q) * b
+        s = mp.sqrt(bb * bb + 8 * a * b)
+        ref = max(((bb + s) / 4, (bb - s) / 4), key=lambda r: r.imag)
+        ref = complex(ref)
+        assert abs(out[k] - ref) <= 1e-13 * abs(ref) + 1e-300, (cases[k], out[k], ref)
+    assert np.all(out.imag >= 0)

@@ -19,8 +19,9 @@ permittivities. The roots of the regularised polynomial come from the Aberth–E
 one is polished by Newton's method on the unperturbed polynomial; a Numba kernel runs this
 over all wavelengths and fractions (no Python loop). Two spherical phases take a vectorised
 closed-form path instead: the quadratic ``2ε² − bε − ε₁ε₂ = 0``, ``b = (3p − 1)ε₁ + (2 − 3p)ε₂``,
-with the same limiting-absorption root choice (never the principal square root, which gives
-Im ε < 0 for metals); it agrees with the general solver to round-off (tested).
+with the same limiting-absorption root choice made to first order in δ from one square root
+(never the principal square root, which gives Im ε < 0 for metals), in one pass; it agrees
+with the general solver to round-off and with a 50-digit reference to 1e-13 (tested).
 
 Spherical grains by default (the percolation threshold of a conducting phase is then
 p = 1/3); randomly oriented ellipsoidal grains with ``shapes=`` (Polder & van Santen 1946),
@@ -41,6 +42,8 @@ References
 """
 
 from __future__ import annotations
+
+import math
 
 import numba
 import numpy as np
@@ -220,50 +223,66 @@ def _bruggeman_kernel(e, f, g_phase, g_L, g_mult, delta, out):
         out[r] = x
 
 
-@numba.njit(cache=True)
-def _quadratic_roots(e1, e2, p):
-    """Both roots of 2ε² − bε − ε1ε2 = 0, b = (3p − 1)ε1 + (2 − 3p)ε2, without cancellation
-    (the larger-modulus root from ``−(a1 ± sqrt)/2`` with the sign that adds, the other from
-    the product of the roots)."""
-    a1 = -((3 * p - 1) * e1 + (2 - 3 * p) * e2)
-    a0 = -e1 * e2
-    sq = np.sqrt(a1 * a1 - 8 * a0)
-    if a1.real * sq.real + a1.imag * sq.imag >= 0:
-        qq = -0.5 * (a1 + sq)
-    else:
-        qq = -0.5 * (a1 - sq)
-    if qq == 0:
-        return 0j, 0j
-    return qq / 2, a0 / qq
-
-
 @numba.vectorize(["complex128(complex128, complex128, float64, float64)"], cache=True)
 def _two_spheres_ufunc(e1, e2, p, delta):
-    scale = max(abs(e1), abs(e2))
-    if scale == 0:
-        scale = 1.0
-    d = 1j * delta * scale
-    g1, g2 = _quadratic_roots(e1 + d, e2 + d, p)
-    guide = g2 if g2.imag > g1.imag else g1
-    r1, r2 = _quadratic_roots(e1, e2, p)
-    x = r2 if abs(r2 - guide) < abs(r1 - guide) else r1
-    if abs(x - guide) > 1e-3 * scale:  # near-double root: keep the guide (as the kernel does)
-        x = guide
-    if e1.imag == 0 and e2.imag == 0 and abs(x.imag) <= 1e-12 * abs(x):
-        x = x.real + 0j  # a real root of a real polynomial: drop round-off
-    if x.imag < 0:  # round-off below zero on lossless input (see passive())
-        x = x.real + 0j
-    return x
+    """The limiting-absorption root of 2ε² − bε − ε1ε2 = 0, b = (3p − 1)ε1 + (2 − 3p)ε2, in one
+    pass and one square root, in real arithmetic (see :func:`_bruggeman_two_spheres`)."""
+    x1, y1, x2, y2 = e1.real, e1.imag, e2.real, e2.imag
+    c1 = 3.0 * p - 1.0
+    c2 = 1.0 - c1
+    br = c1 * x1 + c2 * x2  # b
+    bi = c1 * y1 + c2 * y2
+    pr = x1 * x2 - y1 * y2  # ε1ε2 (the roots' product is −ε1ε2/2)
+    pi = x1 * y2 + y1 * x2
+    dr = br * br - bi * bi + 8.0 * pr  # discriminant b² + 8ε1ε2
+    di = 2.0 * br * bi + 8.0 * pi
+    m = math.sqrt(dr * dr + di * di)  # |discriminant| = |s|²
+    t = math.sqrt(0.5 * (m + abs(dr)))
+    if t == 0.0:  # double root
+        sr = 0.0
+        si = 0.0
+    elif dr >= 0.0:  # s, one square root of the discriminant (which one is chosen below)
+        sr = t
+        si = 0.5 * di / t
+    else:
+        sr = 0.5 * abs(di) / t
+        si = math.copysign(t, di)
+    # roots r± = (b ± s)/4. Give every phase the loss i·η: to first order in η,
+    # Im r+ − Im r− = Im(s)/2 + η Re((b/2 + 2(ε1 + ε2))/s); times |s|² this is `crit`.
+    # The physical root is the one with the larger Im (the only one with Im > 0).
+    eta = delta * max(abs(x1), abs(y1), abs(x2), abs(y2))
+    hr = 0.5 * br + 2.0 * (x1 + x2)
+    hi = 0.5 * bi + 2.0 * (y1 + y2)
+    crit = 0.5 * si * m + eta * (hr * sr + hi * si)
+    if crit < 0.0:
+        sr = -sr
+        si = -si
+    if br * sr + bi * si >= 0.0:  # b and s add: no cancellation
+        xr = 0.25 * (br + sr)
+        xi = 0.25 * (bi + si)
+    else:  # from the product of the roots, −ε1ε2 / (2 r∓) with r∓ = (b − s)/4
+        qr = br - sr
+        qi = bi - si
+        q2 = qr * qr + qi * qi
+        xr = -2.0 * (pr * qr + pi * qi) / q2
+        xi = -2.0 * (pi * qr - pr * qi) / q2
+    if xi <= 0.0:  # round-off below zero on lossless input (see passive()); no −0.0
+        xi = 0.0
+    return complex(xr, xi)
 
 
 def _bruggeman_two_spheres(e1, e2, p):
     """Two-phase Bruggeman for spherical grains in closed form, broadcast over e1, e2, p
     (``p`` the fraction of phase 1), with the same physical-root rule as
-    :func:`_bruggeman_kernel` (limiting absorption): the phases get a loss ``i δ max|ε_i|``,
-    the perturbed quadratic's root with the larger Im ε guides the choice between the two
-    closed-form roots of the unperturbed quadratic; at a near-double root the guide is kept.
-    Choosing by the principal square root instead would put metal–dielectric mixtures on the
-    gain branch (Im ε < 0). A Numba ufunc: one pass, no intermediate arrays."""
+    :func:`_bruggeman_kernel` (limiting absorption): of the two roots ``(b ± s)/4`` of the
+    quadratic, the one whose imaginary part is larger once every phase has the vanishing loss
+    ``i δ max|ε_i|`` — decided to first order in δ from one square root ``s`` of the
+    discriminant, so ties (lossless phases, real roots) are broken by the perturbation and
+    every other case by the sign of Im s. Choosing by the principal square root instead
+    would put metal–dielectric mixtures on the gain branch (Im ε < 0). The root is formed
+    without cancellation (from the product of the roots where ``b`` and ``s`` nearly cancel).
+    A Numba ufunc: one pass, one square root, no intermediate arrays; on 401 × 1000 it runs
+    faster than the principal-root formula in plain NumPy (benchmarks/bench_ema.py)."""
     return _two_spheres_ufunc(np.asarray(e1, complex), np.asarray(e2, complex), np.asarray(p, float), _DELTA)
 
 
