@@ -52,3 +52,68 @@ def test_errors_name_the_key_path():
     raw["coats"][0]["thickness_nm"] = -5.0
     with pytest.raises(RecipeError, match=r"coats\[0\]\.thickness_nm: must be a finite number > 0"):
         parse_recipe(raw)
+
+
+def test_bad_input_names_the_key_and_what_would_be_right():
+    """The issue's "Bad input" cases not covered above, each a RecipeError naming the key."""
+    from nmmm.recipes.run import compute
+
+    # coat pigment fractions above 1
+    raw = _raw("three_coat_solid")
+    raw["coats"][2]["pigments"][0]["fraction"] = 0.999
+    with pytest.raises(RecipeError, match=r"coats\[2\].*pigment fractions sum to 1.004 > 1"):
+        parse_recipe(raw)
+    # a negative fraction
+    raw = _raw("hematite_tint")
+    raw["pigments"][0]["fraction"] = -0.1
+    with pytest.raises(RecipeError, match=r"pigments\[0\]\.fraction: must be in \[0, 1\]"):
+        parse_recipe(raw)
+    # a CPVC above the densest packing of spheres (pi/sqrt(18) = 0.7405): film and coat
+    raw = _raw("hematite_tint")
+    raw["film"]["cpvc"] = 0.9
+    with pytest.raises(RecipeError, match=r"film: coat 'film': cpvc = 0.9 is not a packing fraction: it must lie in "
+                                          r"\(0, 0.7405\]"):
+        compute(parse_recipe(raw), progress=False)
+    raw = _raw("three_coat_solid")
+    raw["coats"][1]["cpvc"] = 0.8
+    with pytest.raises(RecipeError, match=r"coats\[1\]: coat 'red basecoat': cpvc = 0.8 is not a packing fraction"):
+        compute(parse_recipe(raw), progress=False)
+    # a substrate reflectance outside [0, 1] in the film table
+    raw = _raw("hematite_tint")
+    raw["film"]["substrate_reflectance"] = -0.1
+    with pytest.raises(RecipeError, match=r"film\.substrate_reflectance: must be in \[0, 1\]"):
+        parse_recipe(raw)
+    # a negative film thickness
+    raw = _raw("hematite_tint")
+    raw["film"]["thickness_nm"] = -1.0
+    with pytest.raises(RecipeError, match=r"film\.thickness_nm: must be a finite number > 0"):
+        parse_recipe(raw)
+    # a geometry that does not exist: the known ones are named
+    raw = _raw("hematite_tint")
+    raw["measurement"]["geometry"] = "d/8"
+    with pytest.raises(RecipeError, match=r"measurement\.geometry: .*'di:8'.*'0:45a'"):
+        parse_recipe(raw)
+    # a coat's binder with data only beyond part of the grid (rutile's DeVore data start at 430 nm)
+    raw = _raw("three_coat_solid")
+    raw["compounds"]["clear"] = {"database": "main/TiO2/Devore-o"}
+    with pytest.raises(RecipeError, match=r"compounds\.clear: wavelengths 400–700 nm reach outside the data range .*"
+                                          r"430–1530 nm"):
+        compute(parse_recipe(raw), progress=False)
+
+
+def test_cpvc_is_a_packing_fraction():
+    import numpy as np
+
+    from nmmm.errors import InvalidInputError
+    from nmmm.layers.coat_stack import Coat
+    from nmmm.layers.pigment_mixture import MAX_PACKING, check_cpvc, void_fraction
+
+    assert abs(MAX_PACKING - 0.74048) < 1e-5  # Kepler's pi/sqrt(18)
+    assert check_cpvc(0.55) == 0.55
+    for bad in (0.0, -0.2, 0.75, 1.0, np.nan, "x"):
+        with pytest.raises(InvalidInputError, match="cpvc"):
+            check_cpvc(bad)
+    with pytest.raises(InvalidInputError, match="cpvc"):
+        void_fraction(0.5, 0.8)
+    with pytest.raises(InvalidInputError, match=r"coat 'base': cpvc = 0.8"):
+        Coat("base", 1e4, 1.5, cpvc=0.8)

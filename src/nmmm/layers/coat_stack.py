@@ -54,7 +54,7 @@ import numpy as np
 from nmmm.errors import InvalidInputError
 from nmmm.layers.adding_doubling_method import AD_AUTO_QUAD_PTS, _slab, auto_quad_pts, snell_quadrature
 from nmmm.layers.fresnel_equations import fresnel, medium_nk
-from nmmm.layers.pigment_mixture import Component, MixtureOptics, mixture_optics
+from nmmm.layers.pigment_mixture import Component, MixtureOptics, check_cpvc, mixture_optics
 from nmmm.spectra import as_wavelength_nm, check_finite
 
 __all__ = ["Coat", "Substrate", "CoatStack", "StackReflectance", "StackADResult", "coat_optics",
@@ -84,6 +84,8 @@ class Coat:
             raise InvalidInputError(f"coat {self.name!r}: thickness_nm must be > 0 (np.inf for an opaque coat), "
                                     f"got {self.thickness_nm!r}")
         object.__setattr__(self, "components", tuple(self.components))
+        if self.cpvc is not None:
+            check_cpvc(self.cpvc, f"coat {self.name!r}: cpvc")
         for c in self.components:
             if not isinstance(c, Component):
                 raise InvalidInputError(f"coat {self.name!r}: components must be nmmm.layers.pigment_mixture.Component")

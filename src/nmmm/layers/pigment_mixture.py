@@ -11,6 +11,7 @@ Public functions and classes
   mixture in the Percus–Yevick approximation (Lebowitz 1964; Ashcroft & Langreth 1967), by
   Baxter's (1970) factorisation.
 - :func:`void_fraction` — air in a film above the critical PVC.
+- :func:`check_cpvc` — a CPVC validated against the densest packing of spheres (:data:`MAX_PACKING`).
 
 Model
 -----
@@ -69,10 +70,13 @@ from nmmm.layers.distributions import SizeDistribution, monodisperse
 from nmmm.layers.fresnel_equations import medium_nk
 from nmmm.spectra import as_wavelength_nm, check_fraction
 
-__all__ = ["Component", "MixtureOptics", "DEFAULT_CPVC", "mixture_optics", "percus_yevick_mixture", "void_fraction"]
+__all__ = ["Component", "MixtureOptics", "DEFAULT_CPVC", "MAX_PACKING", "check_cpvc", "mixture_optics", "percus_yevick_mixture",
+           "void_fraction"]
 
 #: random close packing of equal spheres (Scott & Kilgour 1969): the CPVC used when none is given
 DEFAULT_CPVC = 0.64
+#: the densest packing of equal spheres, π/√18 (Kepler; Hales 2005): no CPVC lies above it
+MAX_PACKING = float(np.pi / np.sqrt(18.0))
 
 
 @dataclass(frozen=True)
@@ -122,6 +126,20 @@ class MixtureOptics:
             return np.clip(np.where(mu_t > 0, self.mu_s_per_nm / mu_t, 0.0), 0.0, 1.0)
 
 
+def check_cpvc(cpvc, name: str = "cpvc") -> float:
+    """A critical PVC in (0, :data:`MAX_PACKING`]: pigment particles cannot fill more of a film
+    than the densest packing of spheres (0.7405); real paints have 0.35–0.65."""
+    try:
+        c = float(cpvc)
+    except (TypeError, ValueError):
+        c = float("nan")
+    if not 0 < c <= MAX_PACKING + 1e-12:
+        raise InvalidInputError(f"{name} = {cpvc!r} is not a packing fraction: it must lie in (0, {MAX_PACKING:.4f}] "
+                                "(the densest packing of spheres; real paints have 0.35-0.65, from the oil absorption, "
+                                "ISO 787-5)")
+    return c
+
+
 def void_fraction(pvc: float, cpvc: float = DEFAULT_CPVC) -> tuple[float, float, float]:
     """(pigment, binder, air) volume fractions of a film of pigment volume concentration
     ``pvc`` (pigment / (pigment + binder)): below the CPVC (pvc, 1 − pvc, 0); above it
@@ -130,8 +148,7 @@ def void_fraction(pvc: float, cpvc: float = DEFAULT_CPVC) -> tuple[float, float,
     >>> [round(x, 3) for x in void_fraction(0.8, 0.6)]
     [0.6, 0.15, 0.25]
     """
-    if not 0 < cpvc < 1:
-        raise InvalidInputError(f"cpvc must lie in (0, 1), got {cpvc!r}")
+    check_cpvc(cpvc)
     if not 0 <= pvc <= 1:
         raise InvalidInputError(f"the pigment fractions sum to {pvc:g}; it must lie in [0, 1] (a PVC)")
     if pvc <= cpvc:

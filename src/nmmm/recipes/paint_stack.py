@@ -87,7 +87,10 @@ def recipe_stack(recipe, mats, w):
         pigs = recipe.pigments if recipe.pigments is not None else [recipe.pigment]
         dep = any(p.dependent_scattering for p in pigs)
         binder = mats[recipe.binder.compound]
-        coats = [Coat("film", f.thickness_nm, binder, components(pigs, mats), dep, f.cpvc)]
+        try:
+            coats = [Coat("film", f.thickness_nm, binder, components(pigs, mats), dep, f.cpvc)]
+        except NmmmError as exc:
+            raise RecipeError(f"film: {exc}") from None
         if f.clear_coat_nm > 0:
             coats.insert(0, Coat("clear coat", f.clear_coat_nm, binder))
         default_rho = f.substrate_reflectance
