@@ -271,6 +271,8 @@ def _slab(a, tau, chi, nu, w, N):
     start_max = np.minimum(nu_min / 4, 2e-3)  # diamond start error O(dtau³) per thin layer
     with np.errstate(divide="ignore", invalid="ignore"):
         k = np.where(tau_s > start_max, np.ceil(np.log2(np.where(inf, 1.0, tau_s) / start_max)), 0)
+    if np.any(~inf):  # finite slabs of a batch double alike: the thinner ones start thinner (only more
+        k = np.where(inf, k, k[~inf].max())  # accurate), and every step runs on whole arrays (no masked copies)
     k = np.where(inf, 60, k).astype(int)  # up to 2^60 thin layers, stopped when T ~ 0
     dtau = np.where(inf, start_max, tau_s / 2.0**k)
     R, T = _diamond(a_s, dtau, nu, w, hp, hm)
@@ -280,11 +282,17 @@ def _slab(a, tau, chi, nu, w, N):
         todo = (k > step) & ~done
         if not np.any(todo):
             break
+        if np.all(todo):
+            X = np.linalg.solve(I - R @ R, T)  # (I - R R)^-1 T
+            R = R + T @ R @ X
+            T = T @ X
+            if np.any(inf):  # an opaque slab is finished once nothing is transmitted any more
+                done = inf & (np.abs(T).max(axis=(1, 2)) < 1e-15)
+            continue
         Rt, Tt = R[todo], T[todo]
-        X = np.linalg.solve(I - Rt @ Rt, Tt)  # (I - R R)^-1 T
+        X = np.linalg.solve(I - Rt @ Rt, Tt)
         R[todo] = Rt + Tt @ Rt @ X
         T[todo] = Tt @ X
-        # an opaque slab is finished once nothing is transmitted any more
         done[todo] = inf[todo] & (np.abs(T[todo]).max(axis=(1, 2)) < 1e-15)
     return R, T
 
