@@ -61,11 +61,23 @@ def ellipsometry():
 @click.option("--point-by-point", "pbp_layer", default=None, help="Also invert this layer's n, k wavelength by wavelength "
               "(one data file only).")
 @click.option("--no-plot", is_flag=True, help="Do not write the plot.")
-def fit_cmd(data_files, model_files, shared, fmt, output_dir, save_material, pbp_layer, no_plot):
+@click.option("--strict", is_flag=True, help="Refuse a data file with NaN rows, truncated lines, repeated or unsorted "
+              "points, and exit 2 when the fit's reduced MSE is above 10 (instead of warning).")
+@click.option("--no-prescan", is_flag=True, help="Start the local fit from the model's values instead of a global "
+              "scan of each varied layer thickness (which finds the interference order first).")
+def fit_cmd(data_files, model_files, shared, fmt, output_dir, save_material, pbp_layer, no_plot, strict, no_prescan):
     """Fit MODEL's free parameters to DATA_FILES (all angles at once); several data files with
-    --shared are fitted jointly (e.g. films of one resin with different thicknesses)."""
+    --shared are fitted jointly (e.g. films of one resin with different thicknesses).
+
+    Each data file is scanned first (its summary is printed); each varied layer thickness is
+    scanned over its range before the local fit (--no-prescan to skip); a reduced MSE above 10
+    is warned about (--strict: an error, exit 2)."""
+    import warnings
+
     from nmmm.ellipsometry.data import read_data, write_material_csv
+    from nmmm.ellipsometry.fit_start import MSE_WARN_THRESHOLD, check_fit_quality, thickness_prescan
     from nmmm.ellipsometry.model import read_model
+    from nmmm.errors import ConvergenceError
 
     joint = len(data_files) > 1 or shared is not None
     if len(data_files) > 1 and shared is None:
@@ -76,12 +88,23 @@ def fit_cmd(data_files, model_files, shared, fmt, output_dir, save_material, pbp
                                f"models for {len(data_files)} data files")
     if joint and pbp_layer:
         raise click.UsageError("--point-by-point needs a single data file")
-    datas = [read_data(f, format=fmt) for f in data_files]
+    datas = []
+    for f in data_files:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # the scan summary below says it once
+            datas.append(read_data(f, format=fmt, strict=strict))
     models = [read_model(m) for m in model_files]
     if len(models) == 1:
         models = models * len(datas)
     for d in datas:
         click.echo(f"data: {d!r}")
+        scan = d.metadata.get("scan")
+        if scan is not None:
+            click.echo(("  " if scan.clean else "  warning: ") + scan.summary(), err=not scan.clean)
+    if not no_prescan and not joint:
+        models[0], lines = thickness_prescan(models[0], datas[0])
+        for line in lines:
+            click.echo(line)
     click.echo(f"model: {', '.join(dict.fromkeys(m.name for m in models))}")
     if joint:
         from nmmm.ellipsometry.joint import fit_joint
@@ -99,6 +122,11 @@ def fit_cmd(data_files, model_files, shared, fmt, output_dir, save_material, pbp
     click.echo(result.summary())
     click.echo("\ncorrelation matrix:")
     click.echo(result.correlation_table())
+    bad_fit = check_fit_quality(result, MSE_WARN_THRESHOLD)
+    if bad_fit:
+        if strict:
+            raise ConvergenceError(bad_fit + " (--strict)")
+        click.echo(f"warning: {bad_fit}; --strict makes this an error", err=True)
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
     if not no_plot:

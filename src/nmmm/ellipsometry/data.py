@@ -9,6 +9,15 @@ Public objects
 - :func:`write_csv` — write a data set as plain CSV (readable by :func:`read_csv`).
 - :func:`write_material_csv` — write fitted n, k as a Material file for
   ``nmmm.materials.read_csv``.
+- :class:`DataScan` — what the readers found wrong in a file before using it (rows with NaN,
+  truncated lines, repeated or unsorted points); ``data.metadata["scan"]``.
+
+Every reader scans the file first. Rows with a NaN / infinite value and truncated lines (fewer
+numbers than the other data lines: a file cut off mid-line would otherwise be read with the
+wrong columns, e.g. ``E 660 70 26.600 1`` as Δ = 1°) are left out *with a warning naming the
+lines*; repeated (wavelength, angle) points and wavelengths out of order within one angle are
+warned about. With ``strict=True`` (``nmmm ellipsometry fit --strict``) each of these is a
+:class:`DataFileError` instead.
 
 Plain CSV format
 ----------------
@@ -43,6 +52,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -61,6 +71,7 @@ __all__ = [
     "write_csv",
     "write_material_csv",
     "DATA_READERS",
+    "DataScan",
 ]
 
 
@@ -202,6 +213,113 @@ class EllipsometryData:
 
 
 # ----------------------------------------------------------------------------------------
+# pre-scan of a measured file
+# ----------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class DataScan:
+    """What a reader found in a file before using it.
+
+    Attributes
+    ----------
+    path : str
+    n_points : int
+        Data points kept.
+    dropped_nonfinite : tuple of int
+        Line (CSV: data row) numbers left out because a value is NaN or infinite.
+    dropped_truncated : tuple of int
+        Lines left out because they hold fewer numbers than the other data lines.
+    duplicates : int
+        Repeated (wavelength, angle) points (kept; a fit weights them twice).
+    unsorted_angles : tuple of float
+        Angles whose wavelengths are not in increasing or decreasing order.
+    """
+
+    path: str
+    n_points: int
+    dropped_nonfinite: tuple = ()
+    dropped_truncated: tuple = ()
+    duplicates: int = 0
+    unsorted_angles: tuple = ()
+
+    @property
+    def problems(self) -> list:
+        """One sentence per problem found (empty for a clean file)."""
+        out = []
+
+        def lines(nums):
+            shown = ", ".join(str(n) for n in nums[:8])
+            return shown + (f" and {len(nums) - 8} more" if len(nums) > 8 else "")
+
+        if self.dropped_nonfinite:
+            out.append(f"{len(self.dropped_nonfinite)} row(s) with a NaN or infinite value left out (line "
+                       f"{lines(self.dropped_nonfinite)})")
+        if self.dropped_truncated:
+            out.append(f"{len(self.dropped_truncated)} truncated line(s) left out, fewer numbers than the other data "
+                       f"lines (line {lines(self.dropped_truncated)}; a file cut off mid-line?)")
+        if self.duplicates:
+            out.append(f"{self.duplicates} repeated (wavelength, angle) point(s), weighted twice in a fit")
+        if self.unsorted_angles:
+            out.append("wavelengths out of order at angle(s) "
+                       + ", ".join(f"{a:g}" for a in self.unsorted_angles) + " deg (points merged from several runs?)")
+        return out
+
+    @property
+    def clean(self) -> bool:
+        return not self.problems
+
+    def summary(self) -> str:
+        head = f"scan of {self.path}: {self.n_points} points kept"
+        return head + ("; no problems found" if self.clean else "; " + "; ".join(self.problems))
+
+
+def _scan_rows(path, rows, line_nos, min_fields: int, strict: bool, used=(0, 1, 2, 3), sigma=(4, 5)):
+    """Drop non-finite and truncated rows of ``rows`` (``(values, count)``: floats NaN-padded to a
+    common width and the count of numbers the line held; ``line_nos`` their line numbers),
+    returning (array, dropped info). ``min_fields``: the fewest numbers a row may have before it
+    counts as truncated; ``used`` / ``sigma``: the columns read (σ only when the rows have them)."""
+    counts = np.array([r[1] for r in rows])
+    full = int(np.max(counts)) if counts.size else 0
+    # the usual width of a data line: lines shorter than it (and shorter than min_fields, or the
+    # last line) are truncated
+    values, widths = np.unique(counts, return_counts=True)
+    usual = int(values[np.argmax(widths)]) if counts.size else 0
+    arr = np.array([r[0] for r in rows], dtype=float) if rows else np.zeros((0, full))
+    trunc = (counts < usual) | (counts < min_fields)
+    nonfinite = ~trunc & ~np.all(np.isfinite(arr[:, list(used)]), axis=1) if arr.size else np.zeros(0, bool)
+    if arr.size and sigma and usual > max(sigma):  # the sigma columns are read: they must be finite as well
+        nonfinite |= ~trunc & ~np.all(np.isfinite(arr[:, list(sigma)]), axis=1)
+    keep = ~(trunc | nonfinite)
+    info = dict(dropped_nonfinite=tuple(int(n) for n in np.asarray(line_nos)[nonfinite]),
+                dropped_truncated=tuple(int(n) for n in np.asarray(line_nos)[trunc]))
+    if strict and (info["dropped_nonfinite"] or info["dropped_truncated"]):
+        scan = DataScan(str(path), int(keep.sum()), **info)
+        raise DataFileError(f"{path}: " + "; ".join(scan.problems) + " (strict: fix the file, or run without "
+                            "--strict to leave these rows out)")
+    if not keep.any():
+        raise DataFileError(f"{path}: no complete, finite data row (" +
+                            "; ".join(DataScan(str(path), 0, **info).problems) + ")")
+    return arr[keep], info
+
+
+def _finish_scan(path, wl, angle, info, strict: bool) -> DataScan:
+    """Count repeated and unsorted points, warn (or, ``strict``, raise) for every problem."""
+    pts = np.stack([np.round(wl, 6), np.round(angle, 6)], axis=1)
+    dup = int(pts.shape[0] - np.unique(pts, axis=0).shape[0])
+    unsorted = []
+    for a in np.unique(np.round(angle, 6)):
+        w = wl[np.round(angle, 6) == a]
+        d = np.diff(w)
+        if w.size > 2 and not (np.all(d >= 0) or np.all(d <= 0)):
+            unsorted.append(float(a))
+    scan = DataScan(str(path), int(wl.size), duplicates=dup, unsorted_angles=tuple(unsorted), **info)
+    if not scan.clean:
+        if strict:
+            raise DataFileError(f"{path}: " + "; ".join(scan.problems) + " (strict)")
+        warnings.warn(f"{path}: " + "; ".join(scan.problems), UserWarning, stacklevel=3)
+    return scan
+
+
+# ----------------------------------------------------------------------------------------
 # plain CSV
 # ----------------------------------------------------------------------------------------
 _ALIASES = {
@@ -220,18 +338,25 @@ def _norm(name: str) -> str:
     return re.sub(r"[\s\-()\[\]]+", "_", name.strip().lower()).strip("_")
 
 
-def read_csv(path, name: str | None = None) -> EllipsometryData:
+def read_csv(path, name: str | None = None, strict: bool = False) -> EllipsometryData:
     """Read a plain CSV of Ψ, Δ (see the module docstring for the columns).
 
     Raises :class:`DataFileError` naming the file (and row) when it is missing, a required
     column is absent, or a value is not a number; :class:`InvalidInputError` for values
-    out of range (Ψ outside [0°, 90°], ...).
+    out of range (Ψ outside [0°, 90°], ...). Rows with NaN and short rows are left out with a
+    warning (``strict=True``: refused); the scan is ``data.metadata["scan"]``.
     """
     path = Path(path)
     if not path.is_file():
         raise DataFileError(f"ellipsometry data file not found: {path}")
-    text = path.read_text(encoding="utf-8-sig")
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError:
+        raise DataFileError(f"{path}: not UTF-8 text; expected a CSV with the header "
+                            "wavelength_nm, angle_deg, psi_deg, delta_deg[, sigma_psi_deg, sigma_delta_deg]") from None
+    numbered = [(i, ln) for i, ln in enumerate(text.splitlines(), start=1)
+                if ln.strip() and not ln.lstrip().startswith("#")]
+    lines = [ln for _, ln in numbered]
     if len(lines) < 2:
         raise DataFileError(f"{path}: needs a header row and at least one data row")
     reader = csv.reader(io.StringIO("\n".join(lines)))
@@ -250,15 +375,21 @@ def read_csv(path, name: str | None = None) -> EllipsometryData:
         raise DataFileError(
             f"{path}: missing column(s) {', '.join(missing)}; the header has {', '.join(header)}. "
             "Expected: wavelength_nm, angle_deg, psi_deg, delta_deg[, sigma_psi_deg, sigma_delta_deg]")
-    rows = []
+    rows, row_nos = [], []
+    needed = max(col.values()) + 1
     for r_i, row in enumerate(reader, start=2):
-        if len(row) < len(header):
-            raise DataFileError(f"{path}, data row {r_i}: {len(row)} fields, header has {len(header)}")
+        cells = [x for x in row[: len(header)]]
+        while cells and not cells[-1].strip():
+            cells.pop()
         try:
-            rows.append([float(x) for x in row[: len(header)]])
+            vals = [float(x) if x.strip() else np.nan for x in cells]
         except ValueError:
-            raise DataFileError(f"{path}, data row {r_i}: not a number in {row!r}") from None
-    arr = np.array(rows, dtype=float)
+            raise DataFileError(f"{path}, data row {r_i}: not a number in {_shown_row(row)}") from None
+        rows.append((vals + [np.nan] * (len(header) - len(vals)), min(len(vals), needed)))
+        row_nos.append(numbered[r_i - 1][0] if reader.line_num == r_i else r_i)
+    used = [col[k] for k in (wl_keys[0], "angle_deg", "psi_deg", "delta_deg")]
+    sig_cols = [col[k] for k in ("sigma_psi_deg", "sigma_delta_deg") if k in col]
+    arr, info = _scan_rows(path, rows, row_nos, needed, strict, used=used, sigma=sig_cols)
     wkey = wl_keys[0]
     wl = arr[:, col[wkey]]
     if wkey == "wavelength_um":
@@ -281,12 +412,13 @@ def read_csv(path, name: str | None = None) -> EllipsometryData:
             ("sigma_delta_deg", "sigma_psi_deg")
         raise DataFileError(f"{path}: has a {given} column but no {absent}; give both uncertainty columns "
                             "or neither (without them the fit scales its covariance by the reduced chi²)")
+    scan = _finish_scan(path, wl, arr[:, col["angle_deg"]], info, strict)
     try:
         return EllipsometryData(
             wl, arr[:, col["angle_deg"]], arr[:, col["psi_deg"]], arr[:, col["delta_deg"]],
             arr[:, col["sigma_psi_deg"]] if has_sig else None,
             arr[:, col["sigma_delta_deg"]] if has_sig else None,
-            name=name or path.stem, metadata={"path": str(path), "format": "csv"})
+            name=name or path.stem, metadata={"path": str(path), "format": "csv", "scan": scan})
     except InvalidInputError as exc:
         raise InvalidInputError(f"{path}: {exc}") from None
 
@@ -320,14 +452,15 @@ def _write_columns(path: Path, comments, cols, arrs) -> Path:
 # ----------------------------------------------------------------------------------------
 _UNITS_TO_NM = {"nm": ("nm", 1.0), "nanometers": ("nm", 1.0), "angstroms": ("nm", 0.1), "a": ("nm", 0.1),
                 "microns": ("nm", 1e3), "um": ("nm", 1e3), "µm": ("nm", 1e3), "ev": ("ev", None)}
-_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_TAGGED = re.compile(rf"^\s*([A-Za-z][A-Za-z0-9]*)((?:\s+{_NUM}){{4,8}})\s*$")
-_UNTAGGED = re.compile(rf"^\s*((?:{_NUM}\s+){{3,7}}{_NUM})\s*$")
+_NUM = r"(?:[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?i:nan|inf(?:inity)?))"
+_TAGGED = re.compile(rf"^\s*([A-Za-z][A-Za-z0-9]*)((?:\s+{_NUM}){{1,8}})\s*$")
+_UNTAGGED = re.compile(rf"^\s*((?:{_NUM}\s+){{1,7}}{_NUM})\s*$")
 
 
-def read_woollam(path, name: str | None = None) -> EllipsometryData:
+def read_woollam(path, name: str | None = None, strict: bool = False) -> EllipsometryData:
     """Read a J. A. Woollam ASCII Ψ/Δ export (WVASE32 ``.dat`` or CompleteEASE); see the module
-    docstring for the layout supported."""
+    docstring for the layout supported. Data lines with NaN and truncated lines are left out
+    with a warning naming them (``strict=True``: refused); the scan is ``data.metadata["scan"]``."""
     path = Path(path)
     if not path.is_file():
         raise DataFileError(f"ellipsometry data file not found: {path}")
@@ -335,7 +468,7 @@ def read_woollam(path, name: str | None = None) -> EllipsometryData:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         text = path.read_text(encoding="latin-1")
-    header, rows, skipped = [], [], {}
+    header, rows, line_nos, skipped = [], [], [], {}
     unit = None
     for i, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
@@ -343,9 +476,13 @@ def read_woollam(path, name: str | None = None) -> EllipsometryData:
             continue
         m_t = _TAGGED.match(line)
         m_u = None if m_t else _UNTAGGED.match(line)
+        if m_u is not None and not rows and len(m_u.group(1).split()) < 4:
+            m_u = None  # a short line of numbers before the data is a header line (a date, a count)
+        if m_t is not None and not rows and m_t.group(1) != "E" and len(m_t.group(2).split()) < 4:
+            m_t = None  # likewise "VASEmethod 2" style header lines
         if m_t is None and m_u is None:
             if rows:
-                raise DataFileError(f"{path}, line {i}: cannot read {line!r} among the data lines")
+                raise DataFileError(f"{path}, line {i}: cannot read {_shown_row(line)} among the data lines")
             header.append(line)
             low = line.lower()
             if re.match(r"^[a-zµ]+\s+trig\b", low):
@@ -362,36 +499,51 @@ def read_woollam(path, name: str | None = None) -> EllipsometryData:
             nums = m_t.group(2).split()
         else:
             nums = m_u.group(1).split()
+        count = len(nums)
         nums = nums[:6]  # extra columns (e.g. depolarization) are not used
-        rows.append([float(x) for x in nums] + [np.nan] * (6 - len(nums)))
+        rows.append(([float(x) for x in nums] + [np.nan] * (6 - len(nums)), min(count, 6)))
+        line_nos.append(i)
     if not rows:
         raise DataFileError(f"{path}: no Psi/Delta data lines ('E wavelength angle psi delta [sigpsi sigdelta]') found")
     if unit is None:
         raise DataFileError(f"{path}: no spectral unit line (nm, eV, Angstroms or microns) in the header "
                             f"{header!r}; the last header line of a WVASE file names it")
-    arr = np.array(rows, dtype=float)
+    arr, info = _scan_rows(path, rows, line_nos, 4, strict)
     kind, scale = _UNITS_TO_NM[unit]
     spectral = arr[:, 0]
+    if kind == "ev" and np.any(spectral <= 0):
+        raise DataFileError(f"{path}: photon energies must be > 0 eV")
     wl = HC_EV_NM / spectral if kind == "ev" else spectral * scale
     has_sig = not np.isnan(arr[:, 4:6]).any()
+    scan = _finish_scan(path, wl, arr[:, 1], info, strict)
     try:
         return EllipsometryData(
             wl, arr[:, 1], arr[:, 2], arr[:, 3],
             arr[:, 4] if has_sig else None, arr[:, 5] if has_sig else None,
             name=name or (header[0] if header else path.stem),
             metadata={"path": str(path), "format": "woollam", "header": header, "unit": unit,
-                      "skipped_lines": skipped})
+                      "skipped_lines": skipped, "scan": scan})
     except InvalidInputError as exc:
         raise InvalidInputError(f"{path}: {exc}") from None
 
 
-#: reader name -> function(path, name=None) -> EllipsometryData
+def _shown_row(row) -> str:
+    """A data row for an error message: short plain text as is, else only its length (a binary
+    or foreign file is never echoed)."""
+    text = row if isinstance(row, str) else ",".join(row)
+    if len(text) <= 80 and text.isprintable():
+        return repr(text)
+    return f"a {len(text)}-character line"
+
+
+#: reader name -> function(path, name=None, strict=False) -> EllipsometryData
 DATA_READERS = {"csv": read_csv, "woollam": read_woollam}
 
 
-def read_data(path, format: str | None = None, name: str | None = None) -> EllipsometryData:
+def read_data(path, format: str | None = None, name: str | None = None, strict: bool = False) -> EllipsometryData:
     """Read an ellipsometry file; ``format`` one of :data:`DATA_READERS` or ``None`` to decide from
-    the suffix (``.csv`` → csv; ``.dat``/``.txt`` → woollam)."""
+    the suffix (``.csv`` → csv; ``.dat``/``.txt`` → woollam). ``strict``: refuse a file with
+    NaN rows, truncated lines, repeated or unsorted points instead of warning (:class:`DataScan`)."""
     path = Path(path)
     if format is None:
         format = "csv" if path.suffix.lower() == ".csv" else "woollam"
@@ -399,7 +551,7 @@ def read_data(path, format: str | None = None, name: str | None = None) -> Ellip
         reader = DATA_READERS[format]
     except KeyError:
         raise InvalidInputError(f"unknown data format {format!r}; choose one of {sorted(DATA_READERS)}") from None
-    return reader(path, name=name)
+    return reader(path, name=name, strict=strict)
 
 
 def write_material_csv(path, wavelength_nm, nk, name: str = "fitted", reference: str = "",
