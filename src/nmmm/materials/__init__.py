@@ -11,6 +11,8 @@
 - :func:`uniaxial`, :func:`uniaxial_mean`, :class:`DiagonalTensorMaterial` — anisotropy.
 - :mod:`~nmmm.materials.kramers_kronig` — causality: KK transforms and consistency report.
 - :func:`nk_to_eps`, :func:`eps_to_nk` — eq. (1) of the seed paper.
+- :func:`size_damped`, :func:`kreibig_damped_eps` — surface-scattering damping of small metal
+  particles, γ(R) = γ_bulk + A v_F / R (:mod:`~nmmm.materials.size_damping`).
 """
 
 from nmmm.materials.anisotropic import DiagonalTensorMaterial, uniaxial, uniaxial_mean
@@ -32,6 +34,12 @@ from nmmm.materials.material import (
     eps_to_nk,
     nk_to_eps,
 )
+from nmmm.materials.size_damping import (
+    FREE_ELECTRON_PARAMETERS,
+    FreeElectronParameters,
+    kreibig_damped_eps,
+    size_damped,
+)
 from nmmm.materials.models import (
     MODELS,
     Cauchy,
@@ -49,4 +57,5 @@ __all__ = [
     "TabulatedMaterial", "TaucLorentz", "as_material", "eps1_from_eps2", "eps2_from_eps1",
     "eps_to_nk", "get", "keys", "kk_consistency", "n_from_k", "nk_to_eps", "read_csv",
     "read_yaml", "search", "search_entries", "SearchHit", "BINDERS", "binder", "uniaxial", "uniaxial_mean", "write_csv",
+    "FREE_ELECTRON_PARAMETERS", "FreeElectronParameters", "kreibig_damped_eps", "size_damped",
 ]

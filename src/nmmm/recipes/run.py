@@ -130,12 +130,15 @@ def build_materials(recipe: Recipe, wavelength_nm=None, progress: bool | None = 
     recipe order; a database key, file or model error is a :class:`RecipeError` naming the
     compound's key. ``progress``: the FFT levels' progress bar (None: shown for long solves)."""
     from nmmm.ema.mixtures import Inclusion, mix
+    from nmmm.materials import size_damped
 
     w = _grid(recipe) if wavelength_nm is None else wavelength_nm
     mats = {}
     for name, spec in recipe.compounds.items():
         try:
             mats[name] = _compound_material(name, spec, recipe.base_dir)
+            if spec.size_damping is not None:  # Kreibig damping of a metal's free electrons
+                mats[name] = size_damped(mats[name], **spec.size_damping.model_dump())
             mats[name].nk(w)
         except RecipeError:
             raise

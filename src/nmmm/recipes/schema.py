@@ -132,8 +132,17 @@ class Spectral(_Strict):
         return self
 
 
+class SizeDamping(_Strict):
+    """Surface-scattering damping of a metal compound's free electrons in spheres of radius_nm:
+    gamma(R) = gamma_bulk + A v_F / R (:func:`nmmm.materials.size_damped`; A = 1 classical)."""
+
+    radius_nm: Positive
+    A: NonNegative = 1.0
+    metal: Literal["gold", "silver"] = "gold"
+
+
 class Compound(_Strict):
-    """One compound, known by its n + ik: exactly one source."""
+    """One compound, known by its n + ik: exactly one source (``size_damping``: optional, metals)."""
 
     database: str | None = None
     uniaxial: list[str] | None = Field(default=None, min_length=2, max_length=2)
@@ -143,6 +152,7 @@ class Compound(_Strict):
     n: Positive | None = None
     k: NonNegative = 0.0
     label: str | None = None
+    size_damping: SizeDamping | None = None
 
     @model_validator(mode="after")
     def _one_source(self):
