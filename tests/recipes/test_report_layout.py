@@ -47,7 +47,7 @@ def reports(tmp_path_factory):
                    d / "sweep", serial=True, progress=False)
     assert demo.failures == []
     return {"demo": demo.report, "compare": Path(cmp["report"]), "sweep": Path(sw["report"]), "saved": saved,
-            "compare_result": cmp}
+            "compare_result": cmp, "dir": d}
 
 
 def test_every_saved_figure_has_labelled_axes_with_units(reports):
@@ -77,7 +77,8 @@ def _render(path: Path, name: str, media: str = "screen", width: int = VIEWPORT[
                 text: document.body.innerText})""")
             if SHOTS:
                 Path(SHOTS).mkdir(parents=True, exist_ok=True)
-                page.screenshot(path=str(Path(SHOTS) / f"{name}-{media}.png"), full_page=False)
+                page.screenshot(path=str(Path(SHOTS) / f"{name}-{media}-first.png"), full_page=False)
+                page.screenshot(path=str(Path(SHOTS) / f"{name}-{media}-full.png"), full_page=True)
         finally:
             browser.close()
     return errors, info
@@ -129,11 +130,56 @@ def test_compare_names_recipes_not_a_and_b(reports):
     assert {"L_A", "L_B", "dE00"} <= set(rows[0])
 
 
+def test_compare_folders_are_named_after_the_recipes(reports):
+    cmp = reports["compare_result"]
+    folders = [Path(f) for f in cmp["folders"]]
+    assert [f.name for f in folders] == ["Hematite_paint_7", "Hematite_paint_7_ethylcellulose_binder"]
+    assert all((f / "spectra.csv").is_file() and (f / "results.nc").is_file() for f in folders)
+    assert not (reports["dir"] / "compare" / "A").exists() and not (reports["dir"] / "compare" / "B").exists()
+
+
+def test_recipe_folders_tell_equal_names_apart():
+    from nmmm.recipes.compare import recipe_folders
+
+    assert recipe_folders("Hematite paint (7 %)", "hematite paint 7") == ("Hematite_paint_7_first",
+                                                                          "hematite_paint_7_second")
+    assert recipe_folders("", "***") == ("recipe_first", "recipe_second")
+    assert recipe_folders("White", "Tint") == ("White", "Tint")
+
+
+def test_compare_terminal_lines_use_the_recipe_names(reports, monkeypatch):
+    """``nmmm compare`` prints the recipes by name; "A" is only ever illuminant A."""
+    from click.testing import CliRunner
+
+    import nmmm.recipes.compare as compare_module
+    from nmmm.recipes import cli
+
+    monkeypatch.setattr(compare_module, "compare_recipes", lambda *a, **k: reports["compare_result"])
+    d = reports["dir"]
+    r = CliRunner().invoke(cli.compare, [str(d / "epoxy.toml"), str(d / "ethylcellulose.toml"), "-i", "D65",
+                                         "-i", "A", "-o", str(d / "compare"), "--no-progress"])
+    assert r.exit_code == 0, r.output
+    lines = r.output.splitlines()
+    assert lines[0] == "first recipe: Hematite paint (7 %)"
+    assert lines[1] == "second recipe: Hematite paint (7 %), ethylcellulose binder"
+    geometry = reports["compare_result"]["rows"][0]["geometry"]
+    assert any(ln.startswith(f"{geometry}, illuminant A: dE00 = ") for ln in lines), lines
+    body = "\n".join(lines[2:])
+    assert "(A:" not in body and "; B:" not in body
+    assert body.count("(Hematite paint (7 %): L* ") == len(reports["compare_result"]["rows"])
+    assert "Hematite_paint_7_ethylcellulose_binder" in r.output
+
+
 def test_sweep_report_legends_in_words_and_opacity_explained(reports):
     html = reports["sweep"].read_text()
     assert "pigment volume fraction (1)" in html and "L* under D65" in html
     assert "dependent scattering" in html
     assert "hides its substrate" in html and "tint" in html  # the unchanged masstone explained
+    # ... for the series where it holds (independent scattering), not for the one that changes
+    assert ("The masstone hardly changes from 0.05 to 0.1 volume fraction (ΔE00 under D65: 0.00 with dependent "
+            "scattering (Percus–Yevick packing): off; 0.64 with dependent scattering (Percus–Yevick packing): on)") in html
+    assert html.count("hides its substrate") == 1  # said once, not once per series
+    assert html.count("<h2>") == 0 and html.count("<h1>") == 1  # one section: its title is the page's
     assert "nmmm sweep " in html and "--vary pigment.fraction=0.05,0.1" in html
 
 
@@ -251,6 +297,7 @@ def test_unchanged_masstone_note():
     from nmmm.recipes.sanity import masstone_unchanged_note
 
     same = [[24.6, 18.8, 18.6], [24.6, 18.8, 18.6], [24.61, 18.8, 18.6]]
+    assert "(ΔE00 = 0.01 under A)" in masstone_unchanged_note([0.05, 0.07, 0.10], same, 20.0, illuminant="A")
     note = masstone_unchanged_note([0.05, 0.07, 0.10], same, 20.0)
     assert "20 µm film hides its substrate" in note and "tint" in note and "over black" in note
     assert masstone_unchanged_note([0.05, 0.10], [[24.6, 18.8, 18.6], [30.0, 25.0, 20.0]]) == ""

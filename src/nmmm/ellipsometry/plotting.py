@@ -4,6 +4,9 @@
   (lines), and the weighted residuals.
 - :func:`plot_nk` — n and k of one or more materials / inversions, with uncertainty bands.
 
+Every axis is labelled with its quantity and unit (``(1)`` for n, k and σ-weighted residuals),
+as :func:`nmmm.recipes.figures.missing_axis_labels` checks.
+
 Matplotlib with the Agg backend (files, no display).
 """
 
@@ -53,7 +56,7 @@ def plot_fit(data, psi_model, delta_model, path, title: str | None = None) -> Pa
         axes[2].plot(w, (wrap_delta(np.asarray(delta_model) - data.delta_deg) / sd)[sel], "x", ms=2, color=c)
     axes[0].set_ylabel("Ψ (°)")
     axes[1].set_ylabel("Δ (°)")
-    axes[2].set_ylabel("residual / σ" if data.has_sigma else "residual (°)")
+    axes[2].set_ylabel("residual / σ (1)" if data.has_sigma else "residual (°)")
     axes[2].axhline(0, color="k", lw=0.5)
     axes[2].set_xlabel("wavelength (nm)")
     axes[0].legend(title="angle (points: data, lines: model)", fontsize=8)
@@ -84,8 +87,8 @@ def plot_nk(curves, path, title: str = "optical constants") -> Path:
             ok = np.isfinite(sn) & np.isfinite(sk)
             ax_n.fill_between(w[ok], (nk.real - 2 * sn)[ok], (nk.real + 2 * sn)[ok], color=line.get_color(), alpha=0.25)
             ax_k.fill_between(w[ok], (nk.imag - 2 * sk)[ok], (nk.imag + 2 * sk)[ok], color=line.get_color(), alpha=0.25)
-    ax_n.set_ylabel("n")
-    ax_k.set_ylabel("k")
+    ax_n.set_ylabel("refractive index n (1)")
+    ax_k.set_ylabel("extinction coefficient k (1)")
     for ax in (ax_n, ax_k):
         ax.set_xlabel("wavelength (nm)")
     ax_n.legend(fontsize=8)

@@ -117,7 +117,7 @@ def _run(path, out, overrides, no_progress, pair_with, run_recipe):
 @click.command("compare")
 @click.argument("recipe_a")
 @click.argument("recipe_b")
-@click.option("-i", "--illuminant", "illuminants", multiple=True, help="Illuminant (repeatable; default: recipe A's).")
+@click.option("-i", "--illuminant", "illuminants", multiple=True, help="Illuminant (repeatable; default: the first recipe's).")
 @click.option("-o", "--output", "output", default="nmmm-compare", show_default=True, help="Output folder.")
 @click.option("--no-progress", is_flag=True)
 @click.option("--allow-outside-files", is_flag=True,
@@ -135,10 +135,13 @@ def compare(recipe_a, recipe_b, illuminants, output, no_progress, allow_outside_
                                 list(illuminants) or None, progress=not no_progress)
     except NmmmError as exc:
         raise DataError(str(exc)) from None
+    na, nb = r["names"]  # the recipes' own names: "A"/"B" would read as illuminant A
+    click.echo(f"first recipe: {na}\nsecond recipe: {nb}")
     for row in r["rows"]:
-        click.echo(f"{row['geometry']}, {row['illuminant']}: dE00 = {row['dE00']:.3f}  "
-                   f"(A: L* {row['L_A']:.2f} a* {row['a_A']:.2f} b* {row['b_A']:.2f}; "
-                   f"B: L* {row['L_B']:.2f} a* {row['a_B']:.2f} b* {row['b_B']:.2f})")
+        click.echo(f"{row['geometry']}, illuminant {row['illuminant']}: dE00 = {row['dE00']:.3f}  "
+                   f"({na}: L* {row['L_A']:.2f} a* {row['a_A']:.2f} b* {row['b_A']:.2f}; "
+                   f"{nb}: L* {row['L_B']:.2f} a* {row['a_B']:.2f} b* {row['b_B']:.2f})")
+    click.echo(f"runs: {Path(r['folders'][0]).resolve()} and {Path(r['folders'][1]).resolve()}")
     click.echo(f"report: {Path(r['report']).resolve()}")
 
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from nmmm.errors import RecipeError
 
-__all__ = ["compare_results", "compare_recipes", "comparison_section", "recipe_names"]
+__all__ = ["compare_results", "compare_recipes", "comparison_section", "recipe_names", "recipe_folders"]
 
 
 def _common(res_a, res_b):
@@ -61,11 +61,13 @@ def compare_results(res_a, res_b, illuminants=None, observer: str = "2") -> list
 
 
 def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = True) -> dict:
-    """Run both recipes into ``out_dir/A`` and ``out_dir/B`` and write ``out_dir/report.html``.
+    """Run both recipes into sub-folders of ``out_dir`` named after them (:func:`recipe_folders`)
+    and write ``out_dir/report.html``.
 
-    Returns ``{"rows": [...], "report": path, "a": RunResult, "b": RunResult, "section": dict}``
-    (``section``: the comparison as a report section, for :mod:`nmmm.demo`). The folder is locked
-    for the whole comparison (a second one into it is refused); ``A`` and ``B`` are written
+    Returns ``{"rows": [...], "report": path, "a": RunResult, "b": RunResult, "section": dict,
+    "names": (name_a, name_b), "folders": (folder_a, folder_b)}`` (``section``: the comparison as a
+    report section, for :mod:`nmmm.demo`; ``names``: what the report calls the recipes). The folder
+    is locked for the whole comparison (a second one into it is refused); each run is written
     atomically, and the report last, atomically.
     """
     from nmmm.atomic_io import folder_lock
@@ -83,10 +85,15 @@ def _compare_recipes(path_a, path_b, out_dir, illuminants, progress):
     from nmmm.recipes.report import result_section, write_report
     from nmmm.recipes.run import _finish, _spectrum_axes, run_recipe
 
+    from nmmm.recipes.schema import load_recipe
+
     out = Path(out_dir)
+    # each recipe's outputs go to a folder named after the recipe (never out/A and out/B: "A" reads
+    # as illuminant A); the recipes are validated before any physics or folder is made
+    da, db = recipe_folders(load_recipe(path_a).name, load_recipe(path_b).name)
     out.mkdir(parents=True, exist_ok=True)
-    a = run_recipe(path_a, out / "A", progress=progress, report=False)
-    b = run_recipe(path_b, out / "B", progress=progress, report=False)
+    a = run_recipe(path_a, out / da, progress=progress, report=False)
+    b = run_recipe(path_b, out / db, progress=progress, report=False)
     rows = compare_results(a, b, illuminants, a.recipe.lighting.observer)
     na, nb = recipe_names(a, b)
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -114,7 +121,8 @@ def _compare_recipes(path_a, path_b, out_dir, illuminants, progress):
                                   f"nmmm compare {_arg(path_a, 'first.toml')} {_arg(path_b, 'second.toml')} "
                                   f"-i D65 -i A -i FL11 -o {out}")])
     report = out / "report.html"
-    return {"rows": rows, "report": str(report), "a": a, "b": b, "section": summary}
+    return {"rows": rows, "report": str(report), "a": a, "b": b, "section": summary, "names": (na, nb),
+            "folders": (str(out / da), str(out / db))}
 
 
 def _arg(path, placeholder: str) -> str:
@@ -136,6 +144,17 @@ def recipe_names(res_a, res_b) -> tuple[str, str]:
     return na, nb
 
 
+def recipe_folders(name_a: str, name_b: str) -> tuple[str, str]:
+    """The sub-folders ``nmmm compare`` writes the two runs into: the recipes' names made safe for a
+    path (``Hematite paint (7 %)`` -> ``Hematite_paint_7``), ``_first``/``_second`` added when equal."""
+    import re
+
+    fa, fb = (re.sub(r"[^A-Za-z0-9]+", "_", n).strip("_") or "recipe" for n in (name_a, name_b))
+    if fa.lower() == fb.lower():
+        return f"{fa}_first", f"{fb}_second"
+    return fa, fb
+
+
 def _lab_text(L, a, b) -> str:
     return f"{L:.1f}, {a:.1f}, {b:.1f}"
 
@@ -144,7 +163,7 @@ def comparison_section(res_a, res_b, rows, figures=(), names=None) -> dict:
     """The comparison as a report section: one summary box per recipe (its swatch under the first
     illuminant, ΔE00 under each), the overlay and images, and the ΔE00 table with the recipes'
     names in the headers (illuminants are written "illuminant A", recipes by name)."""
-    from nmmm.recipes.report import srgb_note
+    from nmmm.recipes.report import lab_value, srgb_note
 
     na, nb = names or recipe_names(res_a, res_b)
     head = rows[0]
@@ -160,7 +179,7 @@ def comparison_section(res_a, res_b, rows, figures=(), names=None) -> dict:
         if c is None:
             continue
         box = {"heading": name, "swatch": (f"{name} under illuminant {c['illuminant']}", c["srgb"], srgb_note(None, c["L"])),
-               "items": [(f"CIELAB, illuminant {c['illuminant']}", f"L* {c['L']:.1f}   a* {c['a']:.1f}   b* {c['b']:.1f}")]}
+               "items": [(f"CIELAB, illuminant {c['illuminant']}", lab_value(c['L'], c['a'], c['b']))]}
         boxes.append(box)
     if boxes:
         boxes[-1]["items"] += [(f"ΔE00 from the first, illuminant {r['illuminant']}", f"{r['dE00']:.2f}") for r in main]

@@ -131,6 +131,12 @@ def _css_rgb(rgb) -> str:
     return f"rgb({r},{g},{b})"
 
 
+def lab_value(L: float, a: float, b: float) -> str:
+    """CIELAB as a summary box shows it, ``L* 24.8   a* 20.6   b* 18.8``: each name kept with its
+    number by a no-break space, so a narrow box wraps between the pairs, never inside one."""
+    return "   ".join(f"{q}\u00a0{v:.1f}" for q, v in (("L*", L), ("a*", a), ("b*", b)))
+
+
 def srgb_note(rgb_unclipped=None, L=None) -> str:
     """Words for a swatch the display cannot show as computed: "" when it can.
 
@@ -338,11 +344,11 @@ def result_section(res, title: str | None = None, source: str | None = None, com
         c, note = main
         box["swatch"] = (f"{c['spectrum']} under illuminant {c['illuminant']} (CIE {obs}° observer)", c["srgb"], note)
         box["heading"] = r.name
-        items = [(f"CIELAB, illuminant {c['illuminant']}", f"L* {c['L']:.1f}   a* {c['a']:.1f}   b* {c['b']:.1f}"),
+        items = [(f"CIELAB, illuminant {c['illuminant']}", lab_value(c['L'], c['a'], c['b'])),
                  ("chroma, hue", f"C*ab {c['C']:.1f}, h {c['h_deg']:.0f}°")]
         for o in res.colours:
             if o["spectrum"] == res.primary and o["illuminant"] != c["illuminant"]:
-                items.append((f"CIELAB, illuminant {o['illuminant']}", f"L* {o['L']:.1f}   a* {o['a']:.1f}   b* {o['b']:.1f}"))
+                items.append((f"CIELAB, illuminant {o['illuminant']}", lab_value(o['L'], o['a'], o['b'])))
         if "flop_index" in res.scalars:
             items.append(("flop index (Alman 1987)", f"{res.scalars['flop_index']:.1f}"))
         box["items"] = items

@@ -86,11 +86,12 @@ def warn_if_unusual(recipe) -> list[str]:
     return msgs
 
 
-def masstone_unchanged_note(fractions, labs, film_thickness_um: float | None = None) -> str:
+def masstone_unchanged_note(fractions, labs, film_thickness_um: float | None = None,
+                            illuminant: str | None = None) -> str:
     """Why a masstone does not change over a concentration series, or "" when it does.
 
     ``fractions``: pigment volume fractions of the series; ``labs``: their CIELAB (N, 3) under one
-    illuminant. When ΔE00 between the lowest and the highest fraction is below
+    illuminant (named by ``illuminant`` in the sentence when given). When ΔE00 between the lowest and the highest fraction is below
     :data:`UNCHANGED_DE00`, the film hides its substrate at every fraction: its reflectance is the
     infinite-thickness one, set by K/S, which independent scattering keeps constant."""
     from nmmm.colour import delta_e2000
@@ -104,7 +105,8 @@ def masstone_unchanged_note(fractions, labs, film_thickness_um: float | None = N
     if de >= UNCHANGED_DE00:
         return ""
     film = f"the {film_thickness_um:g} µm film" if film_thickness_um else "the film"
-    return (f"The masstone hardly changes from {f[i]:g} to {f[j]:g} volume fraction (ΔE00 = {de:.2f}): {film} hides "
+    under = f" under {illuminant}" if illuminant else ""
+    return (f"The masstone hardly changes from {f[i]:g} to {f[j]:g} volume fraction (ΔE00 = {de:.2f}{under}): {film} hides "
             "its substrate at every one of these fractions (it is opaque), so its colour is the colour of an "
             "infinitely thick layer, set by the ratio K/S, which more pigment leaves unchanged. Concentration "
             "shows in a tint (the pigment let down with a white) or in a draw-down over black "

@@ -93,11 +93,30 @@ def _masstone_note(df, raw) -> str:
     groups = list(df.groupby(others)) if others else [(None, df)]
     thickness = (raw.get("film") or {}).get("thickness_nm") if isinstance(raw.get("film"), dict) else None
     t_um = float(thickness) / 1000.0 if thickness else (20.0 if raw.get("film") is not None else None)
-    for _, g in groups:
-        note = masstone_unchanged_note(g[frac], g[[f"L_{ill}", f"a_{ill}", f"b_{ill}"]].to_numpy(float), t_um)
+    from nmmm.colour import delta_e2000
+    from nmmm.recipes.figures import legend_label
+
+    found = []  # (series in words, ΔE00 lowest -> highest fraction, note) of the series that do not change
+    for key, g in groups:
+        labs = g[[f"L_{ill}", f"a_{ill}", f"b_{ill}"]].to_numpy(float)
+        note = masstone_unchanged_note(g[frac], labs, t_um, illuminant=ill)
         if note:
-            return note + f" (colours under {ill})"
-    return ""
+            f = g[frac].to_numpy(float)
+            de = float(delta_e2000(labs[int(np.argmin(f))], labs[int(np.argmax(f))]))
+            vals = key if isinstance(key, tuple) else (key,)
+            found.append(("; ".join(legend_label(p, v) for p, v in zip(others, vals)), de, note))
+    if not found:
+        return ""
+    if not others:
+        return found[0][2]
+    # one explanation, naming each series it holds for (another swept setting may change the masstone)
+    head, rest = found[0][2].split(" (ΔE00 = ", 1)
+    rest = rest.split("): ", 1)[1]
+    series = "; ".join(f"{de:.2f} with {words}" for words, de, _ in found)
+    text = f"{head} (ΔE00 under {ill}: {series}): {rest}"
+    if len(found) < len(groups):
+        text += " In the other series of this sweep the masstone does change with the fraction (see the plot)."
+    return text
 
 
 def _vary_arg(df, p) -> str:
