@@ -347,10 +347,41 @@ def load_pairs(path, *, check_images: bool = True, max_bytes: int = MAX_IMAGE_BY
                                     f"[left_eye_path, right_eye_path]")
         pair = StimulusPair(pair_id, label, rendered, photo,
                             stereo.get("rendered_stereo"), stereo.get("photo_stereo"))
+        pairs.append((pair, name, stereo))
+    for pair, name, stereo in pairs:  # after the whole file's keys and ids are known good
+        _check_distinct_images(pair.rendered, pair.photo, stereo, name, where)
         if check_images:
             _check_pair_images(pair, name, where, max_bytes, max_pixels)
-        pairs.append(pair)
-    return PairSet(settings, tuple(pairs), source=path)
+    return PairSet(settings, tuple(p for p, _, _ in pairs), source=path)
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """True when ``a`` and ``b`` are one file (same path, a link to it) or byte-identical copies."""
+    if a == b:
+        return True
+    try:
+        if a.exists() and b.exists():
+            if a.samefile(b):
+                return True
+            sa, sb = a.stat().st_size, b.stat().st_size
+            if sa == sb and sa <= MAX_IMAGE_BYTES:
+                return a.read_bytes() == b.read_bytes()
+    except OSError:
+        return False
+    return False
+
+
+def _check_distinct_images(rendered: Path, photo: Path, stereo: dict, name, where):
+    """A pair whose computed image is the photograph measures nothing: refuse it (issue 21)."""
+    checks = [("rendered", rendered, "photo", photo)]
+    if "rendered_stereo" in stereo and "photo_stereo" in stereo:
+        for j in (0, 1):
+            checks.append((f"rendered_stereo[{j}]", stereo["rendered_stereo"][j],
+                           f"photo_stereo[{j}]", stereo["photo_stereo"][j]))
+    for ka, a, kb, b in checks:
+        if _same_file(a, b):
+            raise DataFileError(f"{where}: {name}: {ka!r} and {kb!r} are the same image ({b.name}); a pair needs "
+                                "the computed image and a photograph of the real plate, two different files")
 
 
 def _check_pair_images(pair: StimulusPair, name, where, max_bytes, max_pixels):

@@ -532,6 +532,11 @@ def analyse_responses(rows, *, delta: float = 0.1, alpha: float = 0.05, confiden
         needed for ``target_power``.
     """
     _check_delta(delta)
+    if not (isinstance(alpha, (int, float)) and 0 < alpha < 0.5):
+        raise InvalidInputError(f"alpha (the significance level of each one-sided test) must be in (0, 0.5), "
+                                f"e.g. 0.05; got {alpha!r}")
+    if not (isinstance(confidence, (int, float)) and 0 < confidence < 1):
+        raise InvalidInputError(f"confidence must be in (0, 1), e.g. 0.95; got {confidence!r}")
     rows = list(rows)
     if complete_only:
         answered = {}

@@ -59,10 +59,12 @@ References
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 import numba
+
 import numpy as np
 
 from nmmm.errors import InvalidInputError
@@ -364,6 +366,7 @@ class Stack:
         dshape = np.broadcast_shapes(*(layer.thickness_nm.shape for layer in self.layers)) if self.layers else ()
         shape = dshape + gshape
 
+        _warn_thick_coherent(self.layers, w, n_lay)
         theta = np.radians(a_g)
         coh = [layer.coherent for layer in self.layers]
         if method == "auto":
@@ -405,6 +408,45 @@ class Stack:
             absorbed_s=absorbed("s"),
             absorbed_p=absorbed("p"),
         )
+
+
+#: Narrowest fringe spacing (nm) a coherent layer may have before :meth:`Stack.rt` warns: a
+#: spectrometer's bandwidth is ~1 nm or more, so finer fringes are never seen — the measured
+#: quantity is their average, the incoherent result (Katsidis & Siapkas 2002).
+COHERENT_MIN_FRINGE_NM = 1.0
+#: Optical thickness n·d (nm) from which a coherent layer sampled more coarsely than its fringes
+#: is warned about as aliased (a clear coat, a glass sheet); thinner films (interference pigments,
+#: oxide layers, sparse test grids) are coherent by nature and are not.
+THICK_OPTICAL_NM = 5000.0
+
+
+def _warn_thick_coherent(layers, w, n_lay):
+    """Warn when a coherent layer is so thick that its interference fringes are finer than any
+    instrument resolves (< :data:`COHERENT_MIN_FRINGE_NM`) or, for an optical thickness above
+    :data:`THICK_OPTICAL_NM`, than the wavelength grid samples (fewer than one sample per fringe:
+    the result is aliased). The fringe spacing in wavelength
+    is λ² / (2 n d) at normal incidence."""
+    if not layers or w.size == 0:
+        return
+    lam = float(np.min(w))
+    u = np.unique(w.ravel())
+    step = float(np.max(np.diff(u))) if u.size >= 3 else 0.0
+    for i, (layer, n) in enumerate(zip(layers, n_lay)):
+        if not layer.coherent:
+            continue
+        nd = float(np.max(np.real(n))) * float(np.max(layer.thickness_nm))
+        if not np.isfinite(nd) or nd <= 0:
+            continue
+        fringe = lam**2 / (2.0 * nd)
+        aliased = step > 0 and fringe < step and nd >= THICK_OPTICAL_NM
+        if fringe < COHERENT_MIN_FRINGE_NM or aliased:
+            why = (f"finer than the {step:g} nm wavelength grid (the result is aliased)" if aliased
+                   else f"finer than any spectrometer resolves (< {COHERENT_MIN_FRINGE_NM:g} nm)")
+            warnings.warn(
+                f"layer {i} ({_medium_name(layer.material)}, {float(np.max(layer.thickness_nm)):g} nm) is coherent but "
+                f"its interference fringes are {fringe:.3g} nm apart at {lam:g} nm, {why}; a layer this thick "
+                f"should be incoherent: Layer(material, thickness_nm, coherent=False) or the tuple "
+                f"(material, thickness_nm, 'i')", UserWarning, stacklevel=3)
 
 
 def _broadcaster(shape):

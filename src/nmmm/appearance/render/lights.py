@@ -131,7 +131,21 @@ def read_spd_csv(path) -> SpectralPowerDistribution:
         raise DataFileError(f"{p}: negative power in the emission spectrum (an SPD is >= 0)")
     if a[0, 0] < 100 or a[-1, 0] > 5000:
         raise DataFileError(f"{p}: wavelengths {a[0, 0]:g}-{a[-1, 0]:g} do not look like nm; give wavelength_nm")
+    if not np.any(a[:, 1] > 0):
+        raise DataFileError(f"{p}: the power is zero at every wavelength ({a[0, 0]:g}-{a[-1, 0]:g} nm): a light "
+                            "source emits somewhere; check the power column")
+    lo, hi = VISIBLE_NM
+    if a[0, 0] > lo or a[-1, 0] < hi:
+        import warnings
+
+        warnings.warn(f"{p}: the spectrum covers only {a[0, 0]:g}-{a[-1, 0]:g} nm, not the visible {lo:g}-{hi:g} nm "
+                      "that colour and rendering need; a render grid outside it is refused (measure or supply "
+                      "the full range)", UserWarning, stacklevel=2)
     return SpectralPowerDistribution(a[:, 0], a[:, 1], name=p.stem)
+
+
+#: The range (nm) a light source's spectrum should cover for colour and rendering.
+VISIBLE_NM = (380.0, 780.0)
 
 
 def spd(source) -> SpectralPowerDistribution:
