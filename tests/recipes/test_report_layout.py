@@ -347,3 +347,44 @@ A = 1.5
     np.testing.assert_allclose(ns[2], ns[0], rtol=1e-12)
     np.testing.assert_allclose(ns[0], 1.5 + 0.004 / (w / 1000) ** 2, rtol=1e-12)
     assert "epoxy.B_nm2" in read_model(p).values
+
+
+def test_failed_compare_and_sweep_leave_no_output_folder(tmp_path, monkeypatch):
+    """One CLI voice (issue 25 item 5): a bad recipe is one 'error:' line with exit status 2, and neither
+    `nmmm compare` nor `nmmm sweep` leaves an empty output folder (or a lock file) behind; a comparison
+    whose second run fails removes the folder it made."""
+    from click.testing import CliRunner
+
+    import nmmm.recipes.run as run_module
+    from nmmm.errors import RecipeError
+    from nmmm.recipes import cli
+    from nmmm.recipes.compare import compare_recipes
+
+    good = tmp_path / "good.toml"
+    good.write_text(_dump_toml(fast_raw("hematite_paint", step_nm=20.0)))
+    bad = tmp_path / "bad.toml"
+    bad.write_text(_dump_toml(set_key(fast_raw("hematite_paint", step_nm=20.0), "film.thickness_nm", -5.0)))
+    runner = CliRunner()
+    for cmd, args in ((cli.compare, [str(good), str(bad), "-o", str(tmp_path / "cmp")]),
+                      (cli.sweep, [str(bad), "--vary", "pigment.fraction=0.05,0.1", "--serial", "-o",
+                                   str(tmp_path / "sw")])):
+        r = runner.invoke(cmd, args + ["--no-progress"])
+        assert r.exit_code == 2, r.output
+        assert r.output.startswith("error: film.thickness_nm: must be a finite number > 0") and r.output.count("\n") == 1
+    assert not (tmp_path / "cmp").exists() and not (tmp_path / "sw").exists()
+    assert not (tmp_path / ".cmp.nmmm-lock").exists()
+
+    calls = []
+    real = run_module.run_recipe
+
+    def second_fails(*a, **k):
+        calls.append(1)
+        if len(calls) == 2:
+            raise RecipeError("the second run failed")
+        return real(*a, **k)
+
+    monkeypatch.setattr(run_module, "run_recipe", second_fails)
+    with warnings.catch_warnings(), pytest.raises(RecipeError, match="second run failed"):
+        warnings.simplefilter("ignore")
+        compare_recipes(str(good), str(good), tmp_path / "cmp2", progress=False)
+    assert not (tmp_path / "cmp2").exists() or list((tmp_path / "cmp2").iterdir())  # never empty

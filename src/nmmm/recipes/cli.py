@@ -131,7 +131,7 @@ def compare(recipe_a, recipe_b, illuminants, output, no_progress, allow_outside_
 
     try:
         with files_outside_allowed(allow_outside_files):
-            r = compare_recipes(_recipe_path(recipe_a), _recipe_path(recipe_b), _output_dir(output),
+            r = compare_recipes(_recipe_path(recipe_a), _recipe_path(recipe_b), _output_dir(output, create=False),
                                 list(illuminants) or None, progress=not no_progress)
     except NmmmError as exc:
         raise DataError(str(exc)) from None
@@ -167,7 +167,7 @@ def sweep(recipe, varies, scheduler, n_workers, serial, max_points, output, no_p
     from nmmm.recipes.sweep import sweep as run_sweep
 
     path = _recipe_path(recipe)
-    out = _output_dir(output or f"sweep-{Path(path).stem}")
+    out = _output_dir(output or f"sweep-{Path(path).stem}", create=False)  # made once the grid is valid
     try:
         s = run_sweep(path, list(varies), out, scheduler=scheduler, n_workers=n_workers, serial=serial,
                       progress=not no_progress, max_points=max_points,

@@ -71,12 +71,16 @@ def compare_recipes(path_a, path_b, out_dir, illuminants=None, progress: bool = 
     atomically, and the report last, atomically.
     """
     from nmmm.atomic_io import folder_lock
+    from nmmm.recipes.schema import load_recipe
 
+    # both recipes are validated before any lock, folder or physics; each run's folder is named
+    # after its recipe (never out/A and out/B: "A" reads as illuminant A)
+    folders = recipe_folders(load_recipe(path_a).name, load_recipe(path_b).name)
     with folder_lock(out_dir):
-        return _compare_recipes(path_a, path_b, out_dir, illuminants, progress)
+        return _compare_recipes(path_a, path_b, out_dir, illuminants, progress, folders)
 
 
-def _compare_recipes(path_a, path_b, out_dir, illuminants, progress):
+def _compare_recipes(path_a, path_b, out_dir, illuminants, progress, folders):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -85,15 +89,17 @@ def _compare_recipes(path_a, path_b, out_dir, illuminants, progress):
     from nmmm.recipes.report import result_section, write_report
     from nmmm.recipes.run import _finish, _spectrum_axes, run_recipe
 
-    from nmmm.recipes.schema import load_recipe
-
     out = Path(out_dir)
-    # each recipe's outputs go to a folder named after the recipe (never out/A and out/B: "A" reads
-    # as illuminant A); the recipes are validated before any physics or folder is made
-    da, db = recipe_folders(load_recipe(path_a).name, load_recipe(path_b).name)
+    da, db = folders
+    made = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
-    a = run_recipe(path_a, out / da, progress=progress, report=False)
-    b = run_recipe(path_b, out / db, progress=progress, report=False)
+    try:
+        a = run_recipe(path_a, out / da, progress=progress, report=False)
+        b = run_recipe(path_b, out / db, progress=progress, report=False)
+    except BaseException:
+        if made:  # a failed comparison leaves no folder behind (each run is atomic; only its locks remain)
+            _remove_if_only_locks(out)
+        raise
     rows = compare_results(a, b, illuminants, a.recipe.lighting.observer)
     na, nb = recipe_names(a, b)
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -123,6 +129,18 @@ def _compare_recipes(path_a, path_b, out_dir, illuminants, progress):
     report = out / "report.html"
     return {"rows": rows, "report": str(report), "a": a, "b": b, "section": summary, "names": (na, nb),
             "folders": (str(out / da), str(out / db))}
+
+
+def _remove_if_only_locks(folder: Path) -> None:
+    """Remove ``folder`` when it holds nothing but nmmm's lock files (a comparison that failed)."""
+    try:
+        entries = list(folder.iterdir())
+        if all(e.is_file() and e.name.endswith(".nmmm-lock") for e in entries):
+            for e in entries:
+                e.unlink()
+            folder.rmdir()
+    except OSError:
+        pass
 
 
 def _arg(path, placeholder: str) -> str:
