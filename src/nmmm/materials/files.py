@@ -10,14 +10,15 @@
 
 Tabulated data are interpolated linearly in wavelength (see
 :class:`~nmmm.materials.material.TabulatedMaterial`); k < 0, non-increasing wavelengths and
-non-numeric cells are errors naming the row.
+non-numeric cells are errors naming the row. The CSV is parsed by :func:`pandas.read_csv`
+(``comment="#"``, every cell read as text, then converted with :func:`pandas.to_numeric`), so
+quoting, blank lines and trailing comments follow the standard reader; rows are numbered as
+the file's non-comment lines (the header is row 1).
 """
 
 from __future__ import annotations
 
-import csv
 import io
-import re
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +27,11 @@ from nmmm.errors import DataFileError, InvalidInputError
 from nmmm.materials.material import Material, TabulatedMaterial
 from nmmm.materials.refractiveindex_formulas import formula_model
 
-_UNIT = {"nm": 1.0, "um": 1000.0, "µm": 1000.0, "micron": 1000.0, "microns": 1000.0, "mum": 1000.0}
+_UNIT = {"nm": 1.0, "um": 1000.0, "µm": 1000.0, "μm": 1000.0, "micron": 1000.0, "microns": 1000.0, "mum": 1000.0}
+_WAVELENGTH_NAMES = ("wavelength", "lambda", "wl", "λ")
+_SHOWN_CHARS = set(" _.,;+-()[]µλ")
+#: most columns a data row may have (a wider row is an error, not silently cut)
+_MAX_COLUMNS = 64
 
 
 #: bounds nmmm accepts for tabulated optical constants (n + ik of real materials, 10 nm to 1 mm)
@@ -60,7 +65,7 @@ def _shown(text: str) -> str:
     (letters, digits, separators) is quoted; anything else is only described, so that a
     message never echoes a line of a file that was not meant to be a data file."""
     text = str(text)
-    if len(text) <= 40 and re.fullmatch(r"[\w .,;+\-()\[\]µλ]*", text):
+    if len(text) <= 40 and all(ch.isalnum() or ch in _SHOWN_CHARS for ch in text):
         return repr(text)
     return f"a {len(text)}-character line that is not a column header or numbers"
 
@@ -94,52 +99,94 @@ def check_nk_table(p, w, n, k, row0: int = 2, what: str = "data row") -> None:
 
 
 def _wavelength_unit(header: str, path) -> float:
+    """nm per unit of the first column, read from its header: a wavelength name (``wavelength``,
+    ``wl``, ``lambda``, ``λ``), an optional ``_``, ``(`` or ``[``, the unit, an optional ``)``/``]``."""
     h = header.strip().lower().replace(" ", "")
-    m = re.match(r"^(wavelength|wl|lambda|λ)[_\(\[]?(nm|um|µm|microns?|mum)[\)\]]?$", h)
-    if not m:
+    name = next((n for n in _WAVELENGTH_NAMES if h.startswith(n)), None)
+    rest = h[len(name):] if name else ""
+    if rest[:1] in ("_", "(", "["):
+        rest = rest[1:]
+    if rest[-1:] in (")", "]"):
+        rest = rest[:-1]
+    if name is None or rest not in _UNIT:
         raise DataFileError(
             f"{path}: the first column header ({_shown(header)}) must declare the wavelength unit, "
             "e.g. 'wavelength_nm' or 'wavelength_um'"
         )
-    return _UNIT[m.group(2)]
+    return _UNIT[rest]
+
+
+def _metadata(text: str) -> dict:
+    """The ``# name: …`` and ``# reference: …`` comment lines of a CSV."""
+    meta = {}
+    for line in text.splitlines():
+        s = line.strip()
+        if s.startswith("#"):
+            key, sep, value = s[1:].partition(":")
+            key = key.strip().lower()
+            if sep and key in ("name", "reference"):
+                meta[key] = value.strip()
+    return meta
+
+
+def _cells(p: Path, text: str):
+    """Every non-comment, non-blank line of the CSV as text cells (pandas' reader), or a
+    DataFileError for an empty or unparseable file."""
+    import pandas as pd
+
+    try:
+        table = pd.read_csv(io.StringIO(text), sep=",", comment="#", header=None, dtype=str,
+                            skipinitialspace=True, skip_blank_lines=True, keep_default_na=False,
+                            na_filter=False, names=range(_MAX_COLUMNS), engine="c")
+    except pd.errors.EmptyDataError:
+        raise DataFileError(f"{p}: empty file") from None
+    except pd.errors.ParserError:
+        raise DataFileError(f"{p}: not a CSV nmmm can read (a row with more than {_MAX_COLUMNS} values, or an "
+                            "unclosed quote); give columns wavelength, n, k separated by commas") from None
+    table = table.apply(lambda col: col.str.strip())
+    # drop lines that were only a comment or whitespace (pandas keeps them as rows of empty cells)
+    table = table[(table != "").any(axis=1)]
+    if table.empty:
+        raise DataFileError(f"{p}: empty file")
+    return table
 
 
 def read_csv(path, name: str | None = None) -> TabulatedMaterial:
     """Read a CSV of wavelength, n, k (unit declared in the header) as a Material."""
+    import pandas as pd
+
     p = _existing(path)
     text = _text(p)
-    meta, rows = {}, []
-    for line in text.splitlines():
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            m = re.match(r"#\s*(name|reference)\s*:\s*(.*)", s, re.I)
-            if m:
-                meta[m.group(1).lower()] = m.group(2).strip()
-            continue
-        rows.append(s)
-    if not rows:
-        raise DataFileError(f"{p}: empty file")
-    reader = list(csv.reader(io.StringIO("\n".join(rows)), skipinitialspace=True))
-    header = [h.strip().lower() for h in reader[0]]
+    meta = _metadata(text)
+    table = _cells(p, text)
+    first = [c for c in table.iloc[0].tolist() if c != ""]
+    header = [h.lower() for h in first]
     if len(header) < 2:
-        raise DataFileError(f"{p}: need columns wavelength, n[, k]; the first line ({_shown(','.join(reader[0]))}) "
+        raise DataFileError(f"{p}: need columns wavelength, n[, k]; the first line ({_shown(','.join(first))}) "
                             "is not such a header (e.g. wavelength_nm,n,k)")
     scale = _wavelength_unit(header[0], p)
     if header[1] not in ("n",) or (len(header) > 2 and header[2] not in ("k",)):
         raise DataFileError(f"{p}: columns after the wavelength must be named 'n' and 'k'; got "
-                            f"{_shown(','.join(reader[0][1:]))}")
-    data = []
-    for i, row in enumerate(reader[1:], start=2):
+                            f"{_shown(','.join(first[1:]))}")
+    header = header[:3]
+    cells = table.iloc[1:, : len(header)]
+    if len(cells) < 1:
+        raise DataFileError(f"{p}: need at least two data rows")
+    numbers = cells.apply(pd.to_numeric, errors="coerce").to_numpy(float)
+    # a NaN is a missing cell, a non-numeric one, or a literal nan/inf (refused below as not finite)
+    suspect = np.flatnonzero(np.isnan(numbers).any(axis=1) | (cells == "").to_numpy().any(axis=1))
+    for r in suspect:
+        row = cells.iloc[r].tolist()
+        filled = [c for c in row if c != ""]
+        i = r + 2
         try:
-            vals = [float(c) for c in row[: len(header)]]
+            [float(c) for c in filled]
         except ValueError:
-            raise DataFileError(f"{p}: row {i} ({_shown(','.join(row))}) is not numeric") from None
-        if len(vals) != len(header):
-            raise DataFileError(f"{p}: row {i} has {len(vals)} values, expected {len(header)}")
-        data.append(vals)
-    arr = np.array(data, dtype=float)
+            raise DataFileError(f"{p}: row {i} ({_shown(','.join(filled))}) is not numeric") from None
+        if len(filled) != len(header):
+            raise DataFileError(f"{p}: row {i} has {len(filled)} values, expected {len(header)}")
+        break  # the first suspect row is well-formed: its NaN/inf is told by the finiteness check
+    arr = numbers
     if arr.shape[0] < 2:
         raise DataFileError(f"{p}: need at least two data rows")
     w = arr[:, 0] * scale
