@@ -117,3 +117,31 @@ def test_cpvc_is_a_packing_fraction():
         void_fraction(0.5, 0.8)
     with pytest.raises(InvalidInputError, match=r"coat 'base': cpvc = 0.8"):
         Coat("base", 1e4, 1.5, cpvc=0.8)
+
+
+def test_hematite_paint_runs_adding_doubling_and_its_multiangle_base_agrees():
+    """The seed recipe uses the default solver (adding-doubling); the solid-paint BRDF of its multi-angle
+    colours is built on the Lambertian body that reads the AD spectrum, so 45°:0° and 0°:d agree as for KM."""
+    import numpy as np
+
+    from nmmm.layers.kubelka_munk import saunderson, saunderson_k1, saunderson_k2
+    from nmmm.layers.paint import body_reflectance_from_reading
+
+    for name in ("hematite_paint", "hematite_paint_ethylcellulose"):  # the substitution compares like with like
+        assert load_recipe(example_path(name)).film.solver == "ad"
+    raw = _raw("hematite_paint")
+    raw["spectral"]["step_nm"] = 40.0
+    raw["pigment"]["size_nodes"] = 8
+    res = compute(parse_recipe(raw), progress=False)
+    L45 = next(r["L"] for r in res.multiangle if r["aspecular_deg"] == 45.0)
+    assert abs(L45 - res.scalars["L_D65"]) < 1.0
+    assert any("adding–doubling 0°/d spectrum" in n for n in res.notes)
+    # the body inverts Saunderson's equation (round trip, both specular modes)
+    rho = np.linspace(0.0, 0.95, 7)
+    for sp in ("included", "excluded"):
+        R = saunderson(rho, saunderson_k1(1.566), saunderson_k2(1.566), specular=sp)
+        np.testing.assert_allclose(body_reflectance_from_reading(R, 1.566, sp), rho, atol=1e-12)
+    # the issue's measurement: KM + Saunderson reflects more than adding-doubling on this paint
+    raw["film"]["solver"] = "km"
+    km = compute(parse_recipe(raw), progress=False)
+    assert km.scalars["L_D65"] > res.scalars["L_D65"] + 3

@@ -47,7 +47,7 @@ def reports(tmp_path_factory):
                    d / "sweep", serial=True, progress=False)
     assert demo.failures == []
     return {"demo": demo.report, "compare": Path(cmp["report"]), "sweep": Path(sw["report"]), "saved": saved,
-            "compare_result": cmp, "dir": d}
+            "compare_result": cmp, "sweep_result": sw, "dir": d}
 
 
 def test_every_saved_figure_has_labelled_axes_with_units(reports):
@@ -176,8 +176,21 @@ def test_sweep_report_legends_in_words_and_opacity_explained(reports):
     assert "dependent scattering" in html
     assert "hides its substrate" in html and "tint" in html  # the unchanged masstone explained
     # ... for the series where it holds (independent scattering), not for the one that changes
-    assert ("The masstone hardly changes from 0.05 to 0.1 volume fraction (ΔE00 under D65: 0.00 with dependent "
-            "scattering (Percus–Yevick packing): off; 0.64 with dependent scattering (Percus–Yevick packing): on)") in html
+    # the differences it quotes, recomputed from the sweep's table with colour-science's CIEDE2000: independent
+    # scattering leaves an opaque film's colour to K/S alone, which the concentration does not change (0.00)
+    import colour
+
+    df = reports["sweep_result"]["results"]
+
+    def de(dep):
+        rows = df[df["param:pigment.dependent_scattering"].astype(bool) == dep].sort_values("param:pigment.fraction")
+        lab = rows[["L_D65", "a_D65", "b_D65"]].to_numpy(float)
+        return float(colour.delta_E(lab[0], lab[-1], method="CIE 2000"))
+
+    assert de(False) < 0.005 and de(True) > 0.1
+    assert ("The masstone hardly changes from 0.05 to 0.1 volume fraction (ΔE00 under D65: "
+            f"{de(False):.2f} with dependent scattering (Percus–Yevick packing): off; {de(True):.2f} with dependent "
+            "scattering (Percus–Yevick packing): on)") in html
     assert html.count("hides its substrate") == 1  # said once, not once per series
     assert html.count("<h2>") == 0 and html.count("<h1>") == 1  # one section: its title is the page's
     assert "nmmm sweep " in html and "--vary pigment.fraction=0.05,0.1" in html

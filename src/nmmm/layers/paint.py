@@ -10,6 +10,9 @@ Public functions and classes
 - :func:`mie_phase_moments` — Legendre moments χ_l of the film's Mie phase function
   (size-distribution average weighted by the scattering cross sections), for the AD path
   with ``phase_function="mie"``.
+- :func:`body_reflectance_from_reading` — the Lambertian body ρ under the binder's surface that
+  gives a 0°/d reading (Saunderson's equation inverted): the base of a solid-paint BRDF that
+  reproduces an adding–doubling spectrum.
 - :func:`compare_km_ad` — both solvers on the same film, with the largest reflectance
   difference and the CIEDE2000 colour difference under D65: where KM is good enough.
 
@@ -89,6 +92,7 @@ __all__ = [
     "mie_phase_moments",
     "paint_reflectance",
     "compare_km_ad",
+    "body_reflectance_from_reading",
 ]
 
 
@@ -345,3 +349,26 @@ def compare_km_ad(film: PaintFilm, wavelength_nm, specular: str = "included", qu
         "lab_ad": lab_ad,
         "delta_e2000": float(delta_e2000(lab_km, lab_ad)),
     }
+
+
+def body_reflectance_from_reading(reflectance, n_binder, specular: str = "excluded") -> np.ndarray:
+    """The internal diffuse (Lambertian) body reflectance ρ whose Saunderson (1942) reading
+    R = [k1] + (1 − k1)(1 − k2) ρ / (1 − k2 ρ) equals ``reflectance`` (0°/d, ``specular``
+    included or excluded), k1 and k2 of the binder's surface (:func:`saunderson_k1`,
+    :func:`saunderson_k2`): ρ = x / (1 + k2 x), x = (R − [k1]) / ((1 − k1)(1 − k2)).
+
+    A solid-paint BRDF built on this ρ (:class:`nmmm.appearance.brdf.PaintBRDF`) reads the
+    same 0°/d spectrum as the film's adding–doubling solution, and its other geometries
+    follow from the Lambertian-body picture.
+
+    >>> R = saunderson(0.5, saunderson_k1(1.5), saunderson_k2(1.5), specular="excluded")
+    >>> round(float(body_reflectance_from_reading(R, 1.5)), 9)
+    0.5
+    """
+    if specular not in ("included", "excluded"):
+        raise InvalidInputError("specular must be 'included' or 'excluded'")
+    R = np.asarray(check_finite(reflectance, "reflectance"), dtype=float)
+    n = np.real(np.asarray(n_binder))
+    k1, k2 = saunderson_k1(n), saunderson_k2(n)
+    x = (R - (k1 if specular == "included" else 0.0)) / ((1 - k1) * (1 - k2))
+    return np.clip(x / (1 + k2 * x), 0.0, 1.0)

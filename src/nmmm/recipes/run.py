@@ -198,10 +198,19 @@ def _film(recipe, mats, w, res):
     if recipe.viewing.multiangle:
         from nmmm.appearance.brdf import opaque_paint_from_film
 
-        _multiangle(recipe, opaque_paint_from_film(film(f.substrate_reflectance), w, name=recipe.name), w, res,
-                    add_spectra=False)
+        paint = opaque_paint_from_film(film(f.substrate_reflectance), w, name=recipe.name)
+        body = "Kubelka–Munk body"
+        if f.solver == "ad":  # the Lambertian body that reads the adding-doubling 0°/d spectrum (issue 16)
+            from nmmm.appearance.brdf import PaintBRDF
+            from nmmm.layers.paint import body_reflectance_from_reading
+
+            nb = np.real(np.broadcast_to(mats[recipe.binder.compound].nk(w), w.shape))
+            rho = body_reflectance_from_reading(r.reflectance, nb, f.specular)
+            paint = PaintBRDF(paint.coat, (w, rho), None, name=paint.name)
+            body = "Lambertian body whose Saunderson reading is the adding–doubling 0°/d spectrum"
+        _multiangle(recipe, paint, w, res, add_spectra=False)
         res.notes.append("Multi-angle colour: the same film as the base of a solid paint BRDF "
-                         "(nmmm.appearance.brdf.opaque_paint_from_film: Kubelka–Munk body under a smooth coat of the binder).")
+                         f"(nmmm.appearance.brdf.opaque_paint_from_film: {body} under a smooth coat of the binder).")
     res.notes.append(f"Paint film: {pg.compound} {pg.shape}s (equal-{pg.equivalent_sphere} sphere D = {d:.1f} nm, "
                      f"geometric spread {pg.size_spread:g}) at volume fraction {pg.fraction:g} in {recipe.binder.compound}; "
                      f"film {f.thickness_nm / 1e3:g} µm, clear coat {f.clear_coat_nm / 1e3:g} µm, solver {f.solver}, "
