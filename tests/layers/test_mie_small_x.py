@@ -120,3 +120,26 @@ def test_continuous_across_the_branch_and_optical_theorem():
     for x in [1e-7, 1e-4]:
         r = mie(1.5 + 0j, 1.0, x * WAVELENGTH / np.pi, WAVELENGTH, angles_deg=[0.0])
         np.testing.assert_allclose(4 * r.s1[..., 0].real / x**2, r.qext, rtol=1e-12)
+
+
+def test_coated_and_layered_spheres_at_tiny_x():
+    from nmmm.layers.mie_scattering import mie_coated, mie_multilayer
+
+    # before: ZeroDivisionError at x = 1e-8, g off by 3e9 at x = 1e-6 (psi_n xi_n and b_n cancelled)
+    for x in [1e-8, 1e-6, 1e-3, 0.5]:
+        d = x * WAVELENGTH / np.pi
+        for m in [1.5 + 0.01j, 0.2 + 3.0j]:
+            h = _nmmm(m, x)
+            for r in (mie_coated(m, m, 1.0, 0.7 * d, d, WAVELENGTH),
+                      mie_multilayer([m, m, m], 1.0, [0.3 * d, 0.7 * d, d], WAVELENGTH)):
+                got = np.array([float(r.qext), float(r.qsca), float(r.qback), float(r.g)])
+                np.testing.assert_allclose(got, h, rtol=1e-12, err_msg=f"x={x} m={m}")
+    # Bohren & Huffman eq. 5.36 (electrostatic coated sphere): corrections O(x^2) relative, 1e-16 at x = 1e-8
+    e1, e2 = (3.0 + 0.4j) ** 2, (1.8 + 0.05j) ** 2
+    for x in [1e-8, 1e-6]:
+        b = x * WAVELENGTH / (2 * np.pi)
+        f = 0.7**3
+        a_rel = ((e2 - 1) * (e1 + 2 * e2) + f * (e1 - e2) * (1 + 2 * e2)) / ((e2 + 2) * (e1 + 2 * e2) + f * (2 * e2 - 2) * (e1 - e2))
+        r = mie_coated(np.sqrt(e1), np.sqrt(e2), 1.0, 1.4 * b, 2 * b, WAVELENGTH)
+        np.testing.assert_allclose(float(r.qsca), 8 / 3 * x**4 * abs(a_rel) ** 2, rtol=1e-10)
+        np.testing.assert_allclose(float(r.qabs), 4 * x * a_rel.imag, rtol=1e-10)

@@ -119,7 +119,6 @@ def _one_particle(m, x, mu, out, s1, s2):
     nmax = _n_terms(xL)
     small = xL < SMALL_X
     w = np.empty(4 * (nmax + 1), dtype=np.complex128)
-    E1 = np.empty(nmax + 1, dtype=np.complex128)  # E_n(m x) = (n+1)/(m x) - D_n(m x), for L = 1
     if small:
         _small_x_functions(xL, nmax, w)
 
@@ -134,6 +133,7 @@ def _one_particle(m, x, mu, out, s1, s2):
 
     # D_n^(1)(z) by downward recurrence (Wiscombe 1980; BH eq. 4.89)
     D1 = np.empty((nz, nmax + 1), dtype=np.complex128)
+    EE = np.empty((nz, nmax + 1), dtype=np.complex128)  # E_n(z) = (n+1)/z - D_n(z), without cancelling
     for k in range(nz):
         # start well above both n_max and |z|: the margin grows like |z|^(1/3) (D_nmax agrees
         # with Lentz's continued fraction to < 1e-9 for |z| in [0.05, 1000], any phase)
@@ -146,8 +146,7 @@ def _one_particle(m, x, mu, out, s1, s2):
             d = n / zk - e
             if n - 1 <= nmax:
                 D1[k, n - 1] = d
-                if k == 0:
-                    E1[n - 1] = e
+                EE[k, n - 1] = e
     # (the loop stores D_{n-1} for n - 1 <= nmax: indices 0..nmax are filled)
 
     # per-layer upward state (Yang 2003): psi*xi products, D^(3) and Q ratios
@@ -162,10 +161,15 @@ def _one_particle(m, x, mu, out, s1, s2):
         z2 = z[2 * l]
         e1 = np.exp(2j * z1)
         e2 = np.exp(2j * z2)
-        pxi1[l - 1] = 0.5 * (1.0 - e1)
-        pxi2[l - 1] = 0.5 * (1.0 - e2)
         d3a[l - 1] = 1j
         d3b[l - 1] = 1j
+        if abs(z2) < 1.0:  # 1 - e^{2iz} = -2i e^{iz} sin z, without cancelling for small z
+            pxi1[l - 1] = -1j * np.exp(1j * z1) * np.sin(z1)
+            pxi2[l - 1] = -1j * np.exp(1j * z2) * np.sin(z2)
+            Q[l - 1] = np.exp(1j * (z2 - z1)) * np.sin(z1) / np.sin(z2)
+            continue
+        pxi1[l - 1] = 0.5 * (1.0 - e1)
+        pxi2[l - 1] = 0.5 * (1.0 - e2)
         # Q_0 = [psi_0/xi_0](z1) / [psi_0/xi_0](z2), written so that nothing overflows
         Q[l - 1] = np.exp(2j * (z2 - z1)) * (e1 - 1.0) / (e2 - 1.0)
 
@@ -204,6 +208,7 @@ def _one_particle(m, x, mu, out, s1, s2):
             eta_n = eta_new
         Ha = D1[0, n]
         Hb = Ha
+        db = 0.0j  # Hb - D_n(z_outer), kept apart so that m Hb - D_n(x) does not cancel at small x
         for l in range(1, L):
             i1 = 2 * l - 1
             i2 = 2 * l
@@ -212,8 +217,8 @@ def _one_particle(m, x, mu, out, s1, s2):
             D1z1 = D1[i1, n]
             D1z2 = D1[i2, n]
             # psi_n xi_n and D3_n, upward (Yang 2003, eqs. 18-20)
-            pxi1[l - 1] = pxi1[l - 1] * (n / z1 - D1[i1, n - 1]) * (n / z1 - d3a[l - 1])
-            pxi2[l - 1] = pxi2[l - 1] * (n / z2 - D1[i2, n - 1]) * (n / z2 - d3b[l - 1])
+            pxi1[l - 1] = pxi1[l - 1] * EE[i1, n - 1] * (n / z1 - d3a[l - 1])  # n/z - D_{n-1} = E_{n-1}
+            pxi2[l - 1] = pxi2[l - 1] * EE[i2, n - 1] * (n / z2 - d3b[l - 1])
             d3a_n = D1z1 + 1j / pxi1[l - 1]
             d3b_n = D1z2 + 1j / pxi2[l - 1]
             # Q_n = [psi_n/xi_n](z1) / [psi_n/xi_n](z2) (Yang 2003, eq. 32)
@@ -234,12 +239,13 @@ def _one_particle(m, x, mu, out, s1, s2):
             Ha = (G2 * D1z2 - q * G1 * d3b_n) / (G2 - q * G1)
             G1 = m[l - 1] * Hb - m[l] * D1z1
             G2 = m[l - 1] * Hb - m[l] * d3a_n
-            Hb = (G2 * D1z2 - q * G1 * d3b_n) / (G2 - q * G1)
+            db = q * G1 * (D1z2 - d3b_n) / (G2 - q * G1)
+            Hb = D1z2 + db
 
         if small:
             k = nmax + 1
             an = w[n] * (Ha / mL - w[k + n]) / (Ha / mL - w[2 * k + n])
-            bnum = w[3 * k + n] - mL * E1[n] if L == 1 else mL * Hb - w[k + n]
+            bnum = w[3 * k + n] - mL * EE[nz - 1, n] + mL * db  # = m Hb - D_n(x)
             bn = w[n] * bnum / (mL * Hb - w[2 * k + n])
         else:
             xi_n = psi_n + 1j * eta_n
