@@ -13,6 +13,7 @@ Wavelengths are in nanometres at every public interface of nmmm.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 
@@ -48,7 +49,7 @@ def wavelength_grid(start_nm: float = 380.0, stop_nm: float = 780.0, step_nm: fl
     return np.linspace(start_nm, start_nm + (n - 1) * step_nm, n)
 
 
-def check_finite(x, name: str = "value") -> np.ndarray:
+def check_finite(x: ArrayLike, name: str = "value") -> np.ndarray:
     """Return ``np.asarray(x)``, raising :class:`InvalidInputError` if any entry is NaN or infinite."""
     a = np.asarray(x)
     if a.dtype.kind not in "biufc":
@@ -65,7 +66,7 @@ def check_finite(x, name: str = "value") -> np.ndarray:
     return a
 
 
-def as_wavelength_nm(wavelength_nm, name: str = "wavelength_nm") -> np.ndarray:
+def as_wavelength_nm(wavelength_nm: ArrayLike, name: str = "wavelength_nm") -> np.ndarray:
     """Validate wavelengths in nm: finite and strictly positive; returns a float array."""
     w = check_finite(wavelength_nm, name)
     if np.iscomplexobj(w):
@@ -76,7 +77,7 @@ def as_wavelength_nm(wavelength_nm, name: str = "wavelength_nm") -> np.ndarray:
     return w
 
 
-def check_fraction(fraction, name: str = "fraction") -> np.ndarray:
+def check_fraction(fraction: ArrayLike, name: str = "fraction") -> np.ndarray:
     """Validate a volume fraction in [0, 1] (not percent: 0.05 % is 0.0005)."""
     p = check_finite(fraction, name).astype(float, copy=False)
     if np.any((p < 0) | (p > 1)):
@@ -87,7 +88,7 @@ def check_fraction(fraction, name: str = "fraction") -> np.ndarray:
     return p
 
 
-def check_positive(x, name: str = "value") -> np.ndarray:
+def check_positive(x: ArrayLike, name: str = "value") -> np.ndarray:
     """Validate strictly positive real values (sizes, thicknesses)."""
     a = check_finite(x, name)
     if np.iscomplexobj(a):
@@ -98,7 +99,7 @@ def check_positive(x, name: str = "value") -> np.ndarray:
     return a
 
 
-def check_nk(nk, name: str = "nk") -> np.ndarray:
+def check_nk(nk: ArrayLike, name: str = "nk") -> np.ndarray:
     """Validate complex refractive indices n + ik: finite, n > 0, k ≥ 0 (absorbing convention)."""
     a = check_finite(nk, name).astype(complex, copy=False)
     if np.any(a.imag < 0):

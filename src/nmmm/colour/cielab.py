@@ -13,11 +13,12 @@ References
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.colour.tristimulus import _split_spectral, spectra_to_xyz, white_point
 
 
-def xyz_to_lab(xyz, white_xyz) -> np.ndarray:
+def xyz_to_lab(xyz: ArrayLike, white_xyz: ArrayLike) -> np.ndarray:
     """CIELAB (CIE 015:2018) of XYZ relative to the white ``white_xyz`` (same scale)."""
     import colour
 
@@ -25,7 +26,8 @@ def xyz_to_lab(xyz, white_xyz) -> np.ndarray:
     return colour.XYZ_to_Lab(np.asarray(xyz) / white[1], colour.XYZ_to_xy(white / white[1]))
 
 
-def spectra_to_lab(wavelength_nm, values=None, illuminant="D65", observer="2") -> np.ndarray:
+def spectra_to_lab(wavelength_nm: ArrayLike, values: ArrayLike | None = None, illuminant: str = "D65",
+                   observer: str = "2") -> np.ndarray:
     """CIELAB (last axis L*, a*, b*) of one spectrum or a stack (last axis = wavelength),
     white normalised to Y = 100 under the same illuminant; or of a colour-science
     SpectralDistribution / MultiSpectralDistributions given alone (``spectra_to_lab(sd)``).

@@ -12,12 +12,13 @@ References
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.colour._validation import _check_triplets
 from nmmm.errors import InvalidInputError
 
 
-def delta_e2000(lab1, lab2) -> np.ndarray:
+def delta_e2000(lab1: ArrayLike, lab2: ArrayLike) -> np.ndarray:
     """CIEDE2000 colour difference (Sharma, Wu & Dalal 2005), broadcasting."""
     import colour
 

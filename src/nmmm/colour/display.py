@@ -15,13 +15,15 @@ References
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.colour._validation import _check_triplets
 from nmmm.colour.tristimulus import _split_spectral, spectra_to_xyz, white_point
 from nmmm.errors import InvalidInputError
 
 
-def xyz_to_srgb(xyz, white_xyz=None, clip: bool = True, exposure: float = 1.0) -> np.ndarray:
+def xyz_to_srgb(xyz: ArrayLike, white_xyz: ArrayLike | None = None, clip: bool = True,
+                exposure: float = 1.0) -> np.ndarray:
     """Encoded sRGB in [0, 1] of XYZ (scale: white Y = 100).
 
     ``white_xyz`` is the adopted white (the illuminant's, default D65); colours are adapted
@@ -41,7 +43,8 @@ def xyz_to_srgb(xyz, white_xyz=None, clip: bool = True, exposure: float = 1.0) -
     return np.clip(rgb, 0.0, 1.0) if clip else rgb
 
 
-def spectra_to_srgb(wavelength_nm, values=None, illuminant="D65", observer="2", exposure: float = 1.0) -> np.ndarray:
+def spectra_to_srgb(wavelength_nm: ArrayLike, values: ArrayLike | None = None, illuminant: str = "D65",
+                    observer: str = "2", exposure: float = 1.0) -> np.ndarray:
     """Encoded sRGB in [0, 1] of reflectance / transmittance spectra seen under ``illuminant``
     (arrays, or a colour-science SpectralDistribution / MultiSpectralDistributions given alone)."""
     wavelength_nm, values = _split_spectral(wavelength_nm, values)

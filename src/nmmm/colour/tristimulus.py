@@ -37,8 +37,10 @@ References
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.colour.illuminants import colour_matching_functions, illuminant_on_grid
 from nmmm.errors import InvalidInputError, OutOfRangeError
@@ -128,7 +130,8 @@ def _split_spectral(wavelength_nm, values):
     return w_sd, v
 
 
-def as_spectral_distributions(wavelength_nm, values, labels=None, name: str = "nmmm"):
+def as_spectral_distributions(wavelength_nm: ArrayLike, values: ArrayLike, labels: Sequence[str] | None = None,
+                              name: str = "nmmm") -> "colour.SpectralDistribution | colour.MultiSpectralDistributions":
     """Spectra (last axis = wavelength) as a colour-science ``SpectralDistribution`` (one
     spectrum) or ``MultiSpectralDistributions`` (a stack (M, N), labelled by ``labels``).
 
@@ -171,7 +174,7 @@ def _warn_if_truncated(w, observer):
             "truncated spectrum (use at least 400–700 nm, ideally 380–780 nm)", UserWarning, stacklevel=3)
 
 
-def weighting_factors(wavelength_nm, illuminant="D65", observer="2") -> np.ndarray:
+def weighting_factors(wavelength_nm: ArrayLike, illuminant: str = "D65", observer: str = "2") -> np.ndarray:
     """Weights W (N, 3) such that XYZ = values @ W, the perfect white giving Y = 100
     (ASTM E308 through colour-science for a named or tabulated illuminant; see the module notes).
     ``wavelength_nm`` may be a colour-science (Multi)SpectralDistribution: its wavelengths."""
@@ -192,7 +195,8 @@ def weighting_factors(wavelength_nm, illuminant="D65", observer="2") -> np.ndarr
 NEGATIVE_TOLERANCE = 1e-6
 
 
-def spectra_to_xyz(wavelength_nm, values=None, illuminant="D65", observer="2") -> np.ndarray:
+def spectra_to_xyz(wavelength_nm: ArrayLike, values: ArrayLike | None = None, illuminant: str = "D65",
+                   observer: str = "2") -> np.ndarray:
     """CIE XYZ (last axis X, Y, Z; white Y = 100) of spectra ``values`` (..., N), or of a
     colour-science SpectralDistribution / MultiSpectralDistributions given alone.
 
@@ -218,6 +222,6 @@ def spectra_to_xyz(wavelength_nm, values=None, illuminant="D65", observer="2") -
     return v @ W
 
 
-def white_point(wavelength_nm, illuminant="D65", observer="2") -> np.ndarray:
+def white_point(wavelength_nm: ArrayLike, illuminant: str = "D65", observer: str = "2") -> np.ndarray:
     """XYZ of the perfect white under the illuminant (Y = 100)."""
     return weighting_factors(wavelength_nm, illuminant, observer).sum(axis=0)

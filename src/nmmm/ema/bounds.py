@@ -47,6 +47,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.ema._validation import as_eps, as_fraction
 from nmmm.errors import InvalidInputError
@@ -72,7 +73,7 @@ def _stack(eps_phases, fractions, need_real=False):
     return e, f
 
 
-def wiener_bounds(eps_phases, fractions):
+def wiener_bounds(eps_phases: ArrayLike, fractions: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Wiener bounds ``(lower, upper) = ((Σ f_i/eps_i)^-1, Σ f_i eps_i)``.
 
     For complex ε these are the series and parallel laminates (the two end points of the
@@ -85,7 +86,7 @@ def wiener_bounds(eps_phases, fractions):
     return 1 / np.sum(f / e, -1), np.sum(f * e, -1)
 
 
-def hashin_shtrikman_bounds(eps_phases, fractions):
+def hashin_shtrikman_bounds(eps_phases: ArrayLike, fractions: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Hashin–Shtrikman bounds ``(lower, upper)`` for an isotropic 3-D mixture.
 
     Real positive ε, n phases: ``eps_HS(eps_ref) = (Σ f_i/(eps_i + 2 eps_ref))^-1 − 2 eps_ref``
@@ -150,7 +151,7 @@ class BoundingRegion:
         return inside | (dist <= rtol * size + sag)
 
 
-def bergman_milton_bounds(eps_a, eps_b, fraction, kind: str = "hashin_shtrikman",
+def bergman_milton_bounds(eps_a: ArrayLike, eps_b: ArrayLike, fraction: ArrayLike, kind: str = "hashin_shtrikman",
                           n_points: int = 201) -> BoundingRegion:
     """Bergman–Milton bounding region of the complex effective ε of phases a (fraction f)
     and b (see the module notes for the arcs). ``kind`` is ``"hashin_shtrikman"``

@@ -19,12 +19,13 @@ References
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.ema._validation import as_eps, as_fraction, passive
 from nmmm.errors import InvalidInputError
 
 
-def looyenga(eps_phases, fractions, fraction=None) -> np.ndarray:
+def looyenga(eps_phases: ArrayLike, fractions: ArrayLike, fraction: ArrayLike | None = None) -> np.ndarray:
     """Looyenga effective permittivity: ``eps = (Σ_i f_i eps_i^(1/3))³``.
 
     Call forms as :func:`nmmm.ema.bruggeman_rule`: ``looyenga([eps_1, ...], [f_1, ...])`` or

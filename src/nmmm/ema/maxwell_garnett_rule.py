@@ -34,15 +34,18 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numba
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.ema._validation import (as_depolarization, as_eps, as_fraction, as_host_eps, broadcast_inputs,
                                   check_orientation, passive)
 from nmmm.errors import InvalidInputError
 
 
-def maxwell_garnett(eps_inclusion, eps_host, fraction) -> np.ndarray:
+def maxwell_garnett(eps_inclusion: ArrayLike, eps_host: ArrayLike, fraction: ArrayLike) -> np.ndarray:
     """Maxwell Garnett effective permittivity of spheres in a host, eq. (2) of the seed paper:
 
     ``eps_e = eps_m ((1 + 2p) eps_i + 2(1 - p) eps_m) / ((1 - p) eps_i + (2 + p) eps_m)``
@@ -87,7 +90,7 @@ def _maxwell_garnett_ufunc(ei, em, p):
     return e
 
 
-def maxwell_garnett_polarizability(eps_host, fraction, polarizability) -> np.ndarray:
+def maxwell_garnett_polarizability(eps_host: ArrayLike, fraction: ArrayLike, polarizability: ArrayLike) -> np.ndarray:
     """Maxwell Garnett (Clausius–Mossotti) medium from a polarizability per unit volume:
 
     ``eps_e = eps_m (1 + 2 p alpha / 3) / (1 − p alpha / 3)``
@@ -120,8 +123,8 @@ def _combine(em, terms, orientation):
     return passive(em * (1 + num.mean(-1) / (1 - den.mean(-1))))
 
 
-def maxwell_garnett_ellipsoid(eps_inclusion, eps_host, fraction, depolarization,
-                              orientation: str = "random") -> np.ndarray:
+def maxwell_garnett_ellipsoid(eps_inclusion: ArrayLike, eps_host: ArrayLike, fraction: ArrayLike,
+                              depolarization: ArrayLike, orientation: str = "random") -> np.ndarray:
     """Maxwell Garnett medium of ellipsoidal inclusions.
 
     With ``alpha_j = (eps_i − eps_m) / (eps_m + L_j (eps_i − eps_m))`` along axis j:
@@ -150,14 +153,16 @@ def maxwell_garnett_ellipsoid(eps_inclusion, eps_host, fraction, depolarization,
     return _combine(em_b, [(p, alpha, L)], orientation)
 
 
-def maxwell_garnett_shape(eps_inclusion, eps_host, fraction, shape) -> np.ndarray:
+def maxwell_garnett_shape(eps_inclusion: ArrayLike, eps_host: ArrayLike, fraction: ArrayLike,
+                          shape: str) -> np.ndarray:
     """Maxwell Garnett medium for a :class:`~nmmm.ema.shapes.Shape` (ellipsoid or the cube
     approximation). Aligned shapes return (..., 3), random ones a scalar array."""
     return maxwell_garnett_multi(eps_host, [(eps_inclusion, fraction, shape)],
                                  orientation=shape.orientation)
 
 
-def maxwell_garnett_multi(eps_host, inclusions, orientation: str = "random") -> np.ndarray:
+def maxwell_garnett_multi(eps_host: ArrayLike, inclusions: Sequence[tuple],
+                          orientation: str = "random") -> np.ndarray:
     """Maxwell Garnett medium with several inclusion populations in one host.
 
     ``inclusions`` is a sequence of ``(eps_inclusion, fraction, shape)`` (``shape`` a

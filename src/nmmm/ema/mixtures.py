@@ -28,6 +28,7 @@ see the formula modules.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -137,7 +138,8 @@ def _material(value) -> Material:
     return as_material(value)
 
 
-def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = None) -> DerivedMaterial:
+def mix(host: object, inclusions: Sequence[tuple], method: str = "maxwell_garnett",
+        name: str | None = None) -> DerivedMaterial:
     """The effective medium of ``inclusions`` in ``host`` as a Material (isotropic).
 
     Parameters
@@ -185,7 +187,8 @@ def mix(host, inclusions, method: str = "maxwell_garnett", name: str | None = No
     return result
 
 
-def mix_tensor(host, inclusions, name: str | None = None) -> tuple[DerivedMaterial, DerivedMaterial, DerivedMaterial]:
+def mix_tensor(host: object, inclusions: Sequence[tuple],
+               name: str | None = None) -> tuple[DerivedMaterial, DerivedMaterial, DerivedMaterial]:
     """Aligned inclusions (Maxwell Garnett): the principal permittivities as three Materials
     (along the inclusions' axes 1, 2, 3 — for spheroids, 3 is the symmetry axis, so the
     first and third are the ordinary and extraordinary media of a uniaxial layer)."""

@@ -18,6 +18,9 @@ from __future__ import annotations
 
 import inspect
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 from nmmm.ema.bounds import wiener_bounds
 from nmmm.ema.bruggeman_rule import bruggeman
 from nmmm.ema.looyenga_rule import looyenga
@@ -86,7 +89,8 @@ def canonical_method(method: str) -> str:
     return key
 
 
-def effective_permittivity(eps_inclusion, eps_host, fraction, method: str = "maxwell_garnett", **kwargs):
+def effective_permittivity(eps_inclusion: ArrayLike, eps_host: ArrayLike, fraction: ArrayLike,
+                           method: str = "maxwell_garnett", **kwargs: object) -> np.ndarray:
     """Effective permittivity of inclusions (``fraction``) in a host by the named method.
 
     Parameters

@@ -41,6 +41,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.special import elliprd
 
 from nmmm.ema._validation import as_depolarization, check_orientation
@@ -56,7 +57,7 @@ CUBE_DEPOLARIZATION = 1.0 / CUBE_CONDUCTING_POLARIZABILITY
 SPHERE_DEPOLARIZATION = (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)
 
 
-def ellipsoid_depolarization(a, b, c) -> np.ndarray:
+def ellipsoid_depolarization(a: ArrayLike, b: ArrayLike, c: ArrayLike) -> np.ndarray:
     """Depolarization factors (L_a, L_b, L_c) of an ellipsoid with semi-axes a, b, c.
 
     ``L_a = (abc/2) ∫_0^∞ ds / ((s + a²) sqrt((s + a²)(s + b²)(s + c²)))
@@ -82,7 +83,7 @@ def ellipsoid_depolarization(a, b, c) -> np.ndarray:
     return L / L.sum(axis=-1, keepdims=True)  # remove the last ulp of round-off
 
 
-def spheroid_depolarization(aspect_ratio) -> np.ndarray:
+def spheroid_depolarization(aspect_ratio: ArrayLike) -> np.ndarray:
     """Depolarization factors (L_eq, L_eq, L_polar) of a spheroid.
 
     ``aspect_ratio`` = polar semi-axis / equatorial semi-axis: > 1 prolate (rods; needles
@@ -96,7 +97,7 @@ def spheroid_depolarization(aspect_ratio) -> np.ndarray:
     return ellipsoid_depolarization(np.ones_like(r), np.ones_like(r), r)
 
 
-def ellipsoid_polarizability(eps_inclusion, eps_host, depolarization) -> np.ndarray:
+def ellipsoid_polarizability(eps_inclusion: ArrayLike, eps_host: ArrayLike, depolarization: ArrayLike) -> np.ndarray:
     """Quasi-static polarizability per unit volume of an ellipsoid, along each axis,
     relative to the host: ``alpha_j = (eps_i - eps_m) / (eps_m + L_j (eps_i - eps_m))``
     (Bohren & Huffman 1983, eq. 5.32, divided by eps_m V). Last axis of the result: 3.
@@ -110,7 +111,7 @@ def ellipsoid_polarizability(eps_inclusion, eps_host, depolarization) -> np.ndar
     return d / (em + L * d)
 
 
-def cube_polarizability(eps_inclusion, eps_host) -> np.ndarray:
+def cube_polarizability(eps_inclusion: ArrayLike, eps_host: ArrayLike) -> np.ndarray:
     """Approximate polarizability per unit volume of a cube relative to the host:
     ``(eps_i - eps_m) / (eps_m + L_cube (eps_i - eps_m))`` with ``L_cube = 1/3.6442``
     (exact for eps_i -> eps_m and eps_i -> infinity, Sihvola et al. 2007; an

@@ -46,6 +46,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.ema._validation import as_eps, as_fraction
 from nmmm.errors import InvalidInputError
@@ -65,7 +66,7 @@ class SizeValidityWarning(UserWarning):
     """Particles too large for the effective-medium formula in use."""
 
 
-def size_parameter(radius_nm, wavelength_nm, eps_host) -> np.ndarray:
+def size_parameter(radius_nm: ArrayLike, wavelength_nm: ArrayLike, eps_host: ArrayLike) -> np.ndarray:
     """``x = 2π n_m r / λ``: radius ``radius_nm`` and wavelength ``wavelength_nm`` in nm,
     n_m = Re sqrt(eps_host). Broadcasts.
 
@@ -109,7 +110,7 @@ def _xi2(z):
     return _psi2(z) - 1j * ((3 / z**2 - 1) * np.cos(z) + 3 * np.sin(z) / z)
 
 
-def mie_low_orders(m, x):
+def mie_low_orders(m: ArrayLike, x: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Mie coefficients a1, b1, a2, b2 of a sphere (closed forms, Bohren & Huffman eq. 4.88):
 
     ``a_n = [(D_n(mx)/m + n/x) ψ_n(x) − ψ_{n−1}(x)] / [(D_n(mx)/m + n/x) ξ_n(x) − ξ_{n−1}(x)]``,
@@ -134,7 +135,8 @@ def mie_low_orders(m, x):
     return a1, b1, a2, b2
 
 
-def neglected_multipole_fraction(eps_inclusion, eps_host, radius_nm, wavelength_nm) -> np.ndarray:
+def neglected_multipole_fraction(eps_inclusion: ArrayLike, eps_host: ArrayLike, radius_nm: ArrayLike,
+                                 wavelength_nm: ArrayLike) -> np.ndarray:
     """Share of the sphere's extinction (through order 2) that the electric-dipole theory
     leaves out: ``(3 Re b1 + 5 Re(a2 + b2)) / (3 Re(a1 + b1) + 5 Re(a2 + b2))``
     (extinction efficiency ∝ Σ (2n+1) Re(a_n + b_n), Bohren & Huffman eq. 4.62)."""
@@ -150,7 +152,7 @@ def neglected_multipole_fraction(eps_inclusion, eps_host, radius_nm, wavelength_
     return np.abs(neglected) / np.maximum(np.abs(total), 1e-300)
 
 
-def mie_a1(m, x) -> np.ndarray:
+def mie_a1(m: ArrayLike, x: ArrayLike) -> np.ndarray:
     """First electric Mie coefficient of a sphere (relative index m, size parameter x).
 
     ``a1 = [(D1(mx)/m + 1/x) ψ1(x) − ψ0(x)] / [(D1(mx)/m + 1/x) ξ1(x) − ξ0(x)]``
@@ -179,7 +181,8 @@ def mie_a1(m, x) -> np.ndarray:
     return out
 
 
-def dipole_polarizability_mie(eps_inclusion, eps_host, radius_nm, wavelength_nm) -> np.ndarray:
+def dipole_polarizability_mie(eps_inclusion: ArrayLike, eps_host: ArrayLike, radius_nm: ArrayLike,
+                              wavelength_nm: ArrayLike) -> np.ndarray:
     """Polarizability per unit volume relative to the host from a1: ``9 i a1 / (2 x³)``.
 
     (With α = 6π i a1 / k³ the dipole polarizability in volume units and V = 4π r³/3;
@@ -202,7 +205,7 @@ def _warn_size(x, limit, what, stacklevel=3):
             "Mie scattering with radiative transfer (nmmm.layers)", SizeValidityWarning, stacklevel=stacklevel)
 
 
-def check_quasi_static(radius_nm, wavelength_nm, eps_host,
+def check_quasi_static(radius_nm: ArrayLike, wavelength_nm: ArrayLike, eps_host: ArrayLike,
                        max_size_parameter: float = MAX_SIZE_PARAMETER_QUASI_STATIC) -> np.ndarray:
     """Warn (:class:`SizeValidityWarning`) if particles of ``radius_nm`` are too large for
     the quasi-static formulas at ``wavelength_nm``; returns the size parameters."""
@@ -211,9 +214,9 @@ def check_quasi_static(radius_nm, wavelength_nm, eps_host,
     return x
 
 
-def check_dipole_validity(eps_inclusion, eps_host, radius_nm, wavelength_nm,
+def check_dipole_validity(eps_inclusion: ArrayLike, eps_host: ArrayLike, radius_nm: ArrayLike, wavelength_nm: ArrayLike,
                           max_size_parameter: float = MAX_SIZE_PARAMETER_DIPOLE,
-                          max_neglected: float = MAX_NEGLECTED_MULTIPOLE_FRACTION, stacklevel: int = 3):
+                          max_neglected: float = MAX_NEGLECTED_MULTIPOLE_FRACTION, stacklevel: int = 3) -> np.ndarray:
     """Warn (:class:`SizeValidityWarning`) where the dipole (a1) theory is out of its range:
     size parameter above ``max_size_parameter`` or neglected multipoles (b1, a2, b2) carrying
     more than ``max_neglected`` of the extinction (:func:`neglected_multipole_fraction`)."""
@@ -230,7 +233,8 @@ def check_dipole_validity(eps_inclusion, eps_host, radius_nm, wavelength_nm,
     return share
 
 
-def maxwell_garnett_mie(eps_inclusion, eps_host, fraction, radius_nm, wavelength_nm,
+def maxwell_garnett_mie(eps_inclusion: ArrayLike, eps_host: ArrayLike, fraction: ArrayLike, radius_nm: ArrayLike,
+                        wavelength_nm: ArrayLike,
                         max_size_parameter: float = MAX_SIZE_PARAMETER_DIPOLE,
                         max_neglected: float = MAX_NEGLECTED_MULTIPOLE_FRACTION) -> np.ndarray:
     """Size-corrected Maxwell Garnett (Doyle 1989) for spheres of radius ``radius_nm``:

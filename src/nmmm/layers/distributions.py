@@ -68,6 +68,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.fresnel_equations import medium_nk
@@ -152,7 +153,7 @@ def lognormal(median_nm: float, geometric_std: float, n_nodes: int = 48, span: f
     return SizeDistribution(d_g * np.exp(sigma * t), w, f"log-normal D_g = {d_g:g} nm, σ_g = {s_g:g}")
 
 
-def histogram(bin_edges_nm, counts, nodes_per_bin: int = 4) -> SizeDistribution:
+def histogram(bin_edges_nm: ArrayLike, counts: ArrayLike, nodes_per_bin: int = 4) -> SizeDistribution:
     """A user histogram of particle counts (number distribution) over diameter bins.
 
     The count of each bin is spread evenly over ``nodes_per_bin`` nodes inside it
@@ -263,7 +264,7 @@ EQUIVALENT_SPHERE_METHODS = {
 }
 
 
-def equivalent_sphere_diameter(shape: str, method: str = "volume", **dims) -> float:
+def equivalent_sphere_diameter(shape: str, method: str = "volume", **dims: float) -> float:
     """Diameter (nm) of the sphere standing for a non-spherical particle.
 
     Parameters
@@ -298,7 +299,7 @@ def equivalent_sphere_diameter(shape: str, method: str = "volume", **dims) -> fl
 # --------------------------------------------------------------------------------------
 # structure factor
 # --------------------------------------------------------------------------------------
-def percus_yevick_structure_factor(q_times_diameter, volume_fraction) -> np.ndarray:
+def percus_yevick_structure_factor(q_times_diameter: ArrayLike, volume_fraction: ArrayLike) -> np.ndarray:
     """Hard-sphere structure factor S(q) in the Percus–Yevick approximation.
 
     S(q) = 1 / (1 + 24 f G(A)/A), A = q d (Kinning & Thomas 1984, eqs. 5–7, after
@@ -355,10 +356,10 @@ class PigmentOptics:
 
 
 def pigment_optics(
-    n_particle,
-    n_medium,
+    n_particle: ArrayLike,
+    n_medium: ArrayLike,
     distribution: SizeDistribution,
-    wavelength_nm,
+    wavelength_nm: ArrayLike,
     dependent_scattering_fraction: float | None = None,
     n_angles: int = 96,
 ) -> PigmentOptics:

@@ -49,6 +49,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.spectra import check_finite, check_nk
@@ -94,7 +95,7 @@ def check_angle_deg(angle_deg, name: str = "angle_deg") -> np.ndarray:
     return a
 
 
-def n_cos_theta(n, n_sin_theta):
+def n_cos_theta(n: ArrayLike, n_sin_theta: ArrayLike) -> np.ndarray:
     """``n cos θ`` in a medium of index ``n`` for the conserved ``n0 sin θ0`` (Snell's law).
 
     ``n cos θ = sqrt(n² − (n0 sin θ0)²)``, on the branch of the wave travelling *forward*
@@ -188,7 +189,7 @@ class FresnelCoefficients(UnpolarizedPower):
         return np.abs(self.tp) ** 2 * num / den
 
 
-def fresnel(n1, n2, angle_deg) -> FresnelCoefficients:
+def fresnel(n1: ArrayLike, n2: ArrayLike, angle_deg: ArrayLike) -> FresnelCoefficients:
     """Fresnel amplitude coefficients for light incident from medium 1 onto medium 2.
 
     Parameters
@@ -246,7 +247,7 @@ def fresnel(n1, n2, angle_deg) -> FresnelCoefficients:
     return FresnelCoefficients(rs, rp, ts, tp, n1, n2, np.cos(theta).astype(complex), q2 / n2)
 
 
-def brewster_angle(n1, n2) -> np.ndarray:
+def brewster_angle(n1: ArrayLike, n2: ArrayLike) -> np.ndarray:
     """Brewster's angle in degrees, ``θ_B = arctan(n2/n1)`` (Born & Wolf §1.5.3), where
     ``rp = 0`` for real indices.
 
@@ -260,7 +261,7 @@ def brewster_angle(n1, n2) -> np.ndarray:
     return np.degrees(np.arctan2(n2, n1))
 
 
-def critical_angle(n1, n2) -> np.ndarray:
+def critical_angle(n1: ArrayLike, n2: ArrayLike) -> np.ndarray:
     """Critical angle in degrees, ``arcsin(n2/n1)``, for real ``n1 > n2`` (total internal
     reflection beyond it; Born & Wolf §1.5.4).
 

@@ -46,6 +46,7 @@ References
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.fresnel_equations import fresnel
@@ -98,7 +99,8 @@ def km_coefficients_star(mu_a, mu_s, g):
 KM_COEFFICIENT_METHODS = {"gate": km_coefficients_gate, "star": km_coefficients_star}
 
 
-def km_coefficients(mu_a, mu_s, g, method: str = "gate"):
+def km_coefficients(mu_a: ArrayLike, mu_s: ArrayLike, g: ArrayLike,
+                    method: str = "gate") -> tuple[np.ndarray | float, np.ndarray | float]:
     """Kubelka–Munk (K, S) from absorption μ_a, scattering μ_s (same length unit) and g.
 
     Examples
@@ -124,7 +126,7 @@ def km_coefficients(mu_a, mu_s, g, method: str = "gate"):
 # --------------------------------------------------------------------------------------
 # two-flux solutions
 # --------------------------------------------------------------------------------------
-def km_r_infinity(k_over_s):
+def km_r_infinity(k_over_s: ArrayLike) -> np.ndarray:
     """Reflectance of an opaque layer, R∞ = 1 + K/S − √((K/S)² + 2K/S) (Kubelka 1948, eq. 6)."""
     q = np.asarray(k_over_s, dtype=float)
     if np.any(np.isnan(q)) or np.any(q < 0):
@@ -146,7 +148,8 @@ def _b_coth(b, SX):
     return np.where(small, lim, big)
 
 
-def km_reflectance(K, S, thickness, background_reflectance=0.0):
+def km_reflectance(K: ArrayLike, S: ArrayLike, thickness: ArrayLike,
+                   background_reflectance: ArrayLike = 0.0) -> np.ndarray:
     """Diffuse reflectance of a KM layer of thickness X over a background R_g (Kubelka 1948):
 
         R = [1 − R_g (a − b coth(bSX))] / [a − R_g + b coth(bSX)],  a = 1 + K/S, b = √(a² − 1)
@@ -180,7 +183,7 @@ def km_reflectance(K, S, thickness, background_reflectance=0.0):
     return R[()] if R.ndim == 0 else R
 
 
-def km_transmittance(K, S, thickness):
+def km_transmittance(K: ArrayLike, S: ArrayLike, thickness: ArrayLike) -> np.ndarray:
     """Diffuse transmittance of a free KM layer, T = b / (a sinh(bSX) + b cosh(bSX))
     (Kubelka 1948), with the limits S → 0 (T = e^{−KX}) and K → 0 (T = 1/(1 + SX))."""
     K = _nonneg(K, "K")
@@ -204,13 +207,13 @@ def km_transmittance(K, S, thickness):
 # --------------------------------------------------------------------------------------
 # Saunderson surface correction
 # --------------------------------------------------------------------------------------
-def saunderson_k1(n_binder, angle_deg=0.0, n_ambient=1.0):
+def saunderson_k1(n_binder: ArrayLike, angle_deg: ArrayLike = 0.0, n_ambient: ArrayLike = 1.0) -> np.ndarray:
     """External specular reflectance k1 of the air/binder surface for light incident at
     ``angle_deg`` (unpolarized Fresnel, :func:`nmmm.layers.fresnel_equations.fresnel`)."""
     return fresnel(n_ambient, n_binder, angle_deg).R
 
 
-def saunderson_k2(n_binder, n_ambient=1.0, n_nodes: int = 96):
+def saunderson_k2(n_binder: ArrayLike, n_ambient: ArrayLike = 1.0, n_nodes: int = 96) -> np.ndarray:
     """Internal reflectance k2 of the surface for diffuse (Lambertian) light from inside.
 
     k2 = 1 − (1 − r_e)/m², m = n_binder/n_ambient, where r_e = ∫₀¹ R(μ) 2μ dμ is the
@@ -230,7 +233,7 @@ def saunderson_k2(n_binder, n_ambient=1.0, n_nodes: int = 96):
     return 1 - (1 - r_e) * (n_ambient / n) ** 2
 
 
-def saunderson(body_reflectance, k1, k2, specular: str = "included"):
+def saunderson(body_reflectance: ArrayLike, k1: ArrayLike, k2: ArrayLike, specular: str = "included") -> np.ndarray:
     """Saunderson's (1942) correction of a diffuse body reflectance R_b for the surface:
 
         R = k1 + (1 − k1)(1 − k2) R_b / (1 − k2 R_b)
@@ -253,7 +256,8 @@ def saunderson(body_reflectance, k1, k2, specular: str = "included"):
     raise InvalidInputError("specular must be 'included' or 'excluded'")
 
 
-def hiding_thickness(K, S, contrast_ratio: float = 0.98, white_reflectance: float = 0.8, max_thickness=None):
+def hiding_thickness(K: ArrayLike, S: ArrayLike, contrast_ratio: float = 0.98, white_reflectance: float = 0.8,
+                     max_thickness: float | None = None) -> np.ndarray | float:
     """Thickness at which the contrast ratio R(black)/R(white) of a KM film reaches
     ``contrast_ratio`` (black background 0, white ``white_reflectance``), by bisection in
     log thickness. Same length unit as 1/K, 1/S; inf where it is never reached below

@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
+from os import PathLike
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import DataFileError, InvalidInputError
 from nmmm.materials.material import Material, TabulatedMaterial
@@ -151,7 +153,7 @@ def _cells(p: Path, text: str):
     return table
 
 
-def read_csv(path, name: str | None = None) -> TabulatedMaterial:
+def read_csv(path: str | PathLike[str], name: str | None = None) -> TabulatedMaterial:
     """Read a CSV of wavelength, n, k (unit declared in the header) as a Material."""
     import pandas as pd
 
@@ -210,7 +212,7 @@ def read_csv(path, name: str | None = None) -> TabulatedMaterial:
         raise DataFileError(f"{p}: {exc}") from None
 
 
-def write_csv(material: Material, path, wavelength_nm) -> Path:
+def write_csv(material: Material, path: str | PathLike[str], wavelength_nm: ArrayLike) -> Path:
     """Write ``material`` sampled at ``wavelength_nm`` as a CSV that :func:`read_csv` loads."""
     nk = material.nk(wavelength_nm)
     from nmmm.atomic_io import atomic_write_text
@@ -221,7 +223,7 @@ def write_csv(material: Material, path, wavelength_nm) -> Path:
     return atomic_write_text(path, "\n".join(lines) + "\n")  # complete, or the old file untouched
 
 
-def read_yaml(path, name: str | None = None) -> Material:
+def read_yaml(path: str | PathLike[str], name: str | None = None) -> Material:
     """Read a refractiveindex.info YAML file (wavelengths in µm, as that format defines)."""
     import yaml
 

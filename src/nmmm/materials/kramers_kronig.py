@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.materials.material import HC_EV_NM, Material
@@ -108,7 +109,8 @@ def _energy(wavelength_nm=None, energy_ev=None):
     return HC_EV_NM / as_wavelength_nm(wavelength_nm)
 
 
-def eps1_from_eps2(eps2, wavelength_nm=None, *, energy_ev=None, eps_inf=1.0, at_energy_ev=None):
+def eps1_from_eps2(eps2: ArrayLike, wavelength_nm: ArrayLike | None = None, *, energy_ev: ArrayLike | None = None,
+                   eps_inf: ArrayLike = 1.0, at_energy_ev: ArrayLike | None = None) -> np.ndarray:
     """ε1 from ε2 sampled on a grid: ε1(E) = ε∞ + (2/π) P∫ E'ε2(E')/(E'² − E²) dE'.
 
     Evaluated at the grid points, or at ``at_energy_ev`` if given.
@@ -120,7 +122,8 @@ def eps1_from_eps2(eps2, wavelength_nm=None, *, energy_ev=None, eps_inf=1.0, at_
     return eps_inf + 2 / np.pi * I1
 
 
-def eps2_from_eps1(eps1, wavelength_nm=None, *, energy_ev=None, eps_inf=1.0, at_energy_ev=None):
+def eps2_from_eps1(eps1: ArrayLike, wavelength_nm: ArrayLike | None = None, *, energy_ev: ArrayLike | None = None,
+                   eps_inf: ArrayLike = 1.0, at_energy_ev: ArrayLike | None = None) -> np.ndarray:
     """ε2 from ε1 sampled on a grid: ε2(E) = −(2E/π) P∫ (ε1(E') − ε∞)/(E'² − E²) dE'."""
     E = _energy(wavelength_nm, energy_ev)
     Es, f = _sorted_grid(E, np.asarray(eps1, dtype=float) - eps_inf)
@@ -129,7 +132,8 @@ def eps2_from_eps1(eps1, wavelength_nm=None, *, energy_ev=None, eps_inf=1.0, at_
     return -2 * x / np.pi * I0
 
 
-def n_from_k(k, wavelength_nm=None, *, energy_ev=None, n_inf=1.0, at_energy_ev=None):
+def n_from_k(k: ArrayLike, wavelength_nm: ArrayLike | None = None, *, energy_ev: ArrayLike | None = None,
+             n_inf: ArrayLike = 1.0, at_energy_ev: ArrayLike | None = None) -> np.ndarray:
     """n from k on a grid (KK relation for the complex index N − 1, Wooten 1972 §6.4)."""
     return eps1_from_eps2(k, wavelength_nm, energy_ev=energy_ev, eps_inf=n_inf, at_energy_ev=at_energy_ev)
 
@@ -162,7 +166,8 @@ class KKReport:
                 f"max {self.max_abs:.2e} over {self.wavelength_nm.min():g}–{self.wavelength_nm.max():g} nm")
 
 
-def kk_consistency(material: Material, wavelength_nm=None, n_points: int = 2000, trim: float = 0.1) -> KKReport:
+def kk_consistency(material: Material, wavelength_nm: ArrayLike | None = None, n_points: int = 2000,
+                   trim: float = 0.1) -> KKReport:
     """Check that a Material's n and k are linked by causality over its own range.
 
     The KK integral of k is computed over ``wavelength_nm`` (default: ``n_points`` points

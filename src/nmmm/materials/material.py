@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError, OutOfRangeError
 from nmmm.spectra import as_wavelength_nm, check_finite
@@ -46,7 +47,7 @@ def _refuse_gain(x, part, name: str, what: str) -> None:
             "(exp(-iwt) here), or pass allow_gain=True for an intermediate quantity")
 
 
-def nk_to_eps(nk, allow_gain: bool = False):
+def nk_to_eps(nk: ArrayLike, allow_gain: bool = False) -> np.ndarray:
     """ε = ε1 + iε2 = (n + ik)², i.e. ε1 = n² − k², ε2 = 2nk.
 
     ``k < 0`` (gain, or the other sign convention) is an :class:`InvalidInputError` unless
@@ -57,7 +58,7 @@ def nk_to_eps(nk, allow_gain: bool = False):
     return nk * nk
 
 
-def eps_to_nk(eps, allow_gain: bool = False):
+def eps_to_nk(eps: ArrayLike, allow_gain: bool = False) -> np.ndarray:
     """n + ik from ε, eq. (1) of the seed paper (Born & Wolf):
 
     n = sqrt((ε1 + |ε|)/2), k = sqrt((−ε1 + |ε|)/2), the root with n ≥ 0, k ≥ 0 for ε2 ≥ 0.
@@ -307,7 +308,7 @@ def _check_finite_constant(value):
         raise InvalidInputError(f"parameters must be finite, got {(value,)}")
 
 
-def as_material(value, name: str | None = None) -> Material:
+def as_material(value: object, name: str | None = None) -> Material:
     """Return ``value`` if it is a :class:`Material`; a constant complex n + ik becomes a
     non-dispersive :class:`Constant` material (for quick studies and tests)."""
     if isinstance(value, Material):
