@@ -46,7 +46,10 @@ def test_errors_name_the_key_path():
         parse_recipe(raw)
     raw = _raw("three_coat_solid")
     raw["substrate"] = {"reflectance": 1.3}
-    with pytest.raises(RecipeError, match=r"substrate\.reflectance"):
+    with pytest.raises(RecipeError, match=r"substrate\.reflectance: .*must be in \[0, 1\].*got 1\.3"):
+        parse_recipe(raw)
+    raw["substrate"] = {"reflectance": [0.5, 1.2]}
+    with pytest.raises(RecipeError, match=r"substrate\.reflectance: .*must be in \[0, 1\].*got 1\.2 \(item 1\)"):
         parse_recipe(raw)
     raw = _raw("three_coat_solid")
     raw["coats"][0]["thickness_nm"] = -5.0

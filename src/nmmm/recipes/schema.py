@@ -52,7 +52,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from nmmm.errors import RecipeError
 
@@ -333,10 +333,22 @@ class SubstrateSpec(_Strict):
     """Below the film or stack: exactly one of ``reflectance`` (number or list over the grid),
     ``file`` (CSV wavelength_nm, reflectance), ``compound`` (n + ik) or ``kind`` (black/white)."""
 
-    reflectance: Fraction | list[Fraction] | None = None
+    reflectance: float | list[float] | None = None
     file: str | None = None
     compound: str | None = None
     kind: Literal["black", "white"] | None = None
+
+    @field_validator("reflectance")
+    @classmethod
+    def _reflectance_factor(cls, v):
+        values = [v] if isinstance(v, float) else v
+        if values is not None:
+            for i, r in enumerate(values):
+                if not (math.isfinite(r) and 0.0 <= r <= 1.0):
+                    where = "" if isinstance(v, float) else f" (item {i})"
+                    raise ValueError(f"a reflectance factor must be in [0, 1] (not percent: 85 % is 0.85); "
+                                     f"got {r!r}{where}")
+        return v
 
     @model_validator(mode="after")
     def _one(self):
