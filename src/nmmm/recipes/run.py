@@ -583,39 +583,6 @@ def _write_outputs_into(res: RunResult, out: Path, report: bool, final: Path) ->
     return final_files
 
 
-def _write_netcdf(res, path):
-    import xarray as xr
-
-    w = res.wavelength_nm
-    labels = list(res.spectra)
-    ds = xr.Dataset(coords={"wavelength_nm": ("wavelength_nm", w, {"units": "nm"})})
-    if labels:
-        ds["spectra"] = (("spectrum", "wavelength_nm"), np.stack([res.spectra[k] for k in labels]),
-                         {"units": "1", "long_name": "reflectance / transmittance / reflectance factor"})
-        ds = ds.assign_coords(spectrum=labels)
-    if res.materials:
-        names = list(res.materials)
-        nk = np.stack([res.materials[k] for k in names])
-        ds = ds.assign_coords(compound=names)
-        ds["n"] = (("compound", "wavelength_nm"), nk.real, {"units": "1", "long_name": "refractive index"})
-        ds["k"] = (("compound", "wavelength_nm"), nk.imag, {"units": "1", "long_name": "extinction coefficient"})
-    ills = res.recipe.lighting.illuminants
-    if res.colours and labels:
-        lab = np.full((len(labels), len(ills), 3), np.nan)
-        for r in res.colours:
-            lab[labels.index(r["spectrum"]), ills.index(r["illuminant"])] = (r["L"], r["a"], r["b"])
-        ds = ds.assign_coords(illuminant=ills, cielab=["L*", "a*", "b*"])
-        ds["lab"] = (("spectrum", "illuminant", "cielab"), lab,
-                     {"units": "1", "long_name": f"CIELAB (CIE {res.recipe.lighting.observer} deg observer)"})
-    if res.multiangle:
-        ds = ds.assign_coords(aspecular_deg=("aspecular_deg", [r["aspecular_deg"] for r in res.multiangle], {"units": "degree"}))
-        ds["multiangle_lab"] = (("aspecular_deg", "cielab"), np.array([[r["L"], r["a"], r["b"]] for r in res.multiangle]),
-                                {"units": "1", "illuminant": res.multiangle[0]["illuminant"]})
-    ds.attrs.update({"title": res.recipe.name, "recipe": res.recipe_text or "", "source": "nmmm run"})
-    ds.to_netcdf(path, engine="h5netcdf")
-    return path
-
-
 def _finish(fig, path):
     """Lay out, check the axis labels, save (110 dpi PNG) and close a figure; return its path
     (:func:`nmmm.recipes.figures.save_figure`)."""
