@@ -19,16 +19,6 @@ NOT_YET_ANNOTATED = {
     "nmmm.layers.mie",  # TODO(R): nmmm/layers/mie_scattering.py
     "nmmm.layers.mie_coated",  # TODO(R): nmmm/layers/mie_scattering.py
     "nmmm.layers.mie_multilayer",  # TODO(R): nmmm/layers/mie_scattering.py
-    "nmmm.layers.adding_doubling",  # TODO(K): nmmm/layers/adding_doubling_method.py
-    "nmmm.layers.compare_km_ad",  # TODO(K): nmmm/layers/paint.py
-    "nmmm.layers.film_coefficients",  # TODO(K): nmmm/layers/paint.py
-    "nmmm.layers.paint_reflectance",  # TODO(K): nmmm/layers/paint.py
-    "nmmm.layers.mixture_optics",  # TODO(K): nmmm/layers/pigment_mixture.py
-    "nmmm.layers.percus_yevick_mixture",  # TODO(K): nmmm/layers/pigment_mixture.py
-    "nmmm.layers.stack_reflectance",  # TODO(K): nmmm/layers/coat_stack.py
-    "nmmm.layers.contrast_ratio",  # TODO(K): nmmm/layers/formulation.py
-    "nmmm.layers.formulator_quantities",  # TODO(K): nmmm/layers/formulation.py
-    "nmmm.layers.tinting_strength",  # TODO(K): nmmm/layers/formulation.py
 }
 
 

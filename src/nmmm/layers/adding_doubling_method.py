@@ -59,6 +59,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from numpy.polynomial import legendre as npleg
 
 from nmmm.errors import InvalidInputError
@@ -335,16 +336,16 @@ def _real_index(x, name):
 
 
 def adding_doubling(
-    albedo,
-    optical_thickness,
-    g,
-    n_slab=1.0,
-    n_ambient=1.0,
-    n_below=None,
-    substrate_reflectance=None,
-    clear_coat_optical_thickness=0.0,
+    albedo: ArrayLike,
+    optical_thickness: ArrayLike,
+    g: ArrayLike,
+    n_slab: ArrayLike = 1.0,
+    n_ambient: ArrayLike = 1.0,
+    n_below: ArrayLike | None = None,
+    substrate_reflectance: ArrayLike | None = None,
+    clear_coat_optical_thickness: ArrayLike = 0.0,
     quad_pts: int | None = None,
-    phase_moments=None,
+    phase_moments: ArrayLike | None = None,
     quadrature: str = "snell",
 ) -> ADResult:
     """Reflectance and transmittance of a scattering slab by adding–doubling.

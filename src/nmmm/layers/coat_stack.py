@@ -47,9 +47,11 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.adding_doubling_method import AD_AUTO_QUAD_PTS, _slab, auto_quad_pts, snell_quadrature
@@ -402,8 +404,8 @@ def _km(stack: CoatStack, w, opts, geometry, quad_pts=None):
 STACK_SOLVERS = {"ad": _ad, "km": _km}
 
 
-def stack_reflectance(stack: CoatStack, wavelength_nm, solver: str = "ad", geometry: str = "di:8",
-                      quad_pts: int | None = None, optics=None) -> StackReflectance:
+def stack_reflectance(stack: CoatStack, wavelength_nm: ArrayLike, solver: str = "ad", geometry: str = "di:8",
+                      quad_pts: int | None = None, optics: Sequence[MixtureOptics] | None = None) -> StackReflectance:
     """Reflectance of a coat stack as the instrument ``geometry`` reports it.
 
     ``geometry``: a name of :data:`nmmm.layers.geometries.GEOMETRIES` ("di:8", "de:8",

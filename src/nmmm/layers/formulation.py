@@ -35,6 +35,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.coat_stack import CoatStack, Substrate, coat_optics, stack_reflectance
@@ -54,7 +55,7 @@ def _Y(w, R):
     return np.asarray(spectra_to_xyz(w, R))[..., 1] / np.asarray(white)[..., 1]
 
 
-def contrast_ratio(wavelength_nm, over_black, over_white) -> float:
+def contrast_ratio(wavelength_nm: ArrayLike, over_black: ArrayLike, over_white: ArrayLike) -> float:
     """Y(over black) / Y(over white), CIE 1931 2° under D65 (ISO 6504-3; ASTM D2805)."""
     w = np.asarray(wavelength_nm, float)
     return float(_Y(w, np.asarray(over_black, float)) / _Y(w, np.asarray(over_white, float)))
@@ -117,7 +118,7 @@ def hiding_thickness_for(stack: CoatStack, wavelength_nm, target: float = 0.98, 
     return float(hi)
 
 
-def formulator_quantities(stack: CoatStack, wavelength_nm, solver: str = "ad", geometry: str = "de:8",
+def formulator_quantities(stack: CoatStack, wavelength_nm: ArrayLike, solver: str = "ad", geometry: str = "de:8",
                           target: float = 0.98, hiding: bool = True) -> FormulatorQuantities:
     """Over white (0.80) and over black, masstone, contrast ratio, hiding thickness and spreading
     rate of the top coat of ``stack`` at its thickness (module docstring)."""
@@ -143,7 +144,8 @@ def _k_over_s(R_sce, n_binder):
     return (1 - Rinf) ** 2 / (2 * Rinf)
 
 
-def tinting_strength(wavelength_nm, test_masstone_sce, reference_masstone_sce, n_binder) -> dict:
+def tinting_strength(wavelength_nm: ArrayLike, test_masstone_sce: ArrayLike, reference_masstone_sce: ArrayLike,
+                     n_binder: ArrayLike) -> dict:
     """Relative tinting strength (%) of a test reduction against a reference reduction (both
     opaque, SCE readings, the same white and ratio): ISO 787-24 style from K/S at the
     wavelength of maximum absorption of the reference (module docstring)."""

@@ -74,6 +74,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.special import expn
 
 from nmmm.errors import InvalidInputError
@@ -174,7 +175,7 @@ def _nk(x, w, name):
     return np.broadcast_to(medium_nk(x, w, name), w.shape)
 
 
-def film_coefficients(film: PaintFilm, wavelength_nm) -> FilmCoefficients:
+def film_coefficients(film: PaintFilm, wavelength_nm: ArrayLike) -> FilmCoefficients:
     """μ_a, μ_s and g of the film (module docstring)."""
     w = as_wavelength_nm(np.atleast_1d(wavelength_nm))
     nb = _nk(film.binder, w, "binder")
@@ -281,7 +282,7 @@ PAINT_SOLVERS = {"km": _km, "ad": _ad}
 
 def paint_reflectance(
     film: PaintFilm,
-    wavelength_nm,
+    wavelength_nm: ArrayLike,
     solver: str = "km",
     specular: str = "included",
     quad_pts: int | None = None,
@@ -323,7 +324,7 @@ def paint_reflectance(
     return PaintReflectance(co.wavelength_nm, np.asarray(R, dtype=float), solver, specular, co)
 
 
-def compare_km_ad(film: PaintFilm, wavelength_nm, specular: str = "included", quad_pts: int | None = None,
+def compare_km_ad(film: PaintFilm, wavelength_nm: ArrayLike, specular: str = "included", quad_pts: int | None = None,
                   phase_function: str = "mie") -> dict:
     """Kubelka–Munk against adding–doubling on one film.
 

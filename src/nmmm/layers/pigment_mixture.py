@@ -61,9 +61,11 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.distributions import SizeDistribution, monodisperse
@@ -156,7 +158,7 @@ def void_fraction(pvc: float, cpvc: float = DEFAULT_CPVC) -> tuple[float, float,
     return float(cpvc), float((1 - pvc) * cpvc / pvc), float(1 - cpvc / pvc)
 
 
-def percus_yevick_mixture(q, diameters_nm, number_densities_per_nm3, n_r: int = 24) -> np.ndarray:
+def percus_yevick_mixture(q: ArrayLike, diameters_nm: ArrayLike, number_densities_per_nm3: ArrayLike, n_r: int = 24) -> np.ndarray:
     """Partial structure factors S_ij(q) of a hard-sphere mixture (Percus–Yevick).
 
     Baxter's (1970) factorisation of the Lebowitz (1964) solution: with
@@ -206,7 +208,7 @@ def _gauss_mu(n_host, w, comps, L):
     return np.polynomial.legendre.leggauss(n)
 
 
-def mixture_optics(components, binder, wavelength_nm, dependent_scattering: bool = False, cpvc: float | None = None,
+def mixture_optics(components: Sequence[Component], binder: object, wavelength_nm: ArrayLike, dependent_scattering: bool = False, cpvc: float | None = None,
                    n_moments: int = 97) -> MixtureOptics:
     """μ_a, μ_s, phase moments of a film of several particulate components (module docstring).
 
