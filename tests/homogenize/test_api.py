@@ -292,3 +292,23 @@ def test_one_operator_for_the_whole_spectrum():
     lab = G.boolean_spheres(16, 0.2, 2, ndim=3, seed=2)
     r = fft_permittivity(lab, {0: 2.25, 1: np.array([4.0 + 1j, -50 + 2j])}, directions=[0])
     assert r.green == "willot2014" and set(r.metadata["green_used"].ravel()) == {"willot2014"}
+
+
+def test_complex64_on_a_low_loss_metal_cell_is_solved_in_complex128_and_reported():
+    """complex64 stalls above tol 1e-5 on low-loss metal cells (issue 22): with green=None the
+    solve is promoted to complex128 and says so; an explicit operator, a lossy metal or a loose
+    tol keep complex64. The promoted result equals a complex128 solve with the same operator."""
+    lab = G.boolean_spheres(20, 0.2, 2.5, ndim=3, seed=1)
+    eps = {0: 2.25, 1: -50 + 1j}
+    r = fft_permittivity(lab, eps, dtype="complex64", tol=1e-5, directions=[0])
+    assert r.dtype == "complex128"
+    kinds = [s["what"] for s in r.switches]
+    assert kinds == ["green", "dtype"]
+    assert r.switches[1]["from"] == "complex64" and "low-loss metal" in r.switches[1]["reason"]
+    ref = fft_permittivity(lab, eps, dtype="complex128", tol=1e-5, green="willot2014", fallback=False,
+                           directions=[0])
+    assert r.tensor[0, 0] == pytest.approx(ref.tensor[0, 0], rel=1e-12)
+    for kwargs in ({"green": "willot2014"}, {"tol": 1e-3}):
+        assert fft_permittivity(lab, eps, dtype="complex64", directions=[0], **{"tol": 1e-5, **kwargs}).dtype == \
+            "complex64"
+    assert fft_permittivity(lab, {0: 2.25, 1: -50 + 20j}, dtype="complex64", directions=[0]).dtype == "complex64"

@@ -38,8 +38,10 @@ Known limitations
 - Quasi-static only: features must be small against λ/n (a warning says when not).
 - No GPU backend yet (design in docs/gpu-backend.md: a CuPy port would replace scipy.fft and
   the four kernels).
-- Low-loss metal flakes (ε ≈ −50 + 1..2i, 10 % platelets) do not reach tol 1e-5 in complex64
-  with any operator or solver (benchmarks/bench_fft_metals.py; complex128 not yet measured).
+- complex64 cannot reach tol 1e-5 on 3-D cells with a low-loss metal (ε ≈ −50 + 1..2i: COCG
+  stalls at 1e-5 to 6e-5 with any operator); with ``green=None`` such solves run in complex128
+  (reported in ``switches``), where 64³ flakes converge in 432-505 projections and spheres in
+  118-304 (benchmarks/bench_fft_metals.py).
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity

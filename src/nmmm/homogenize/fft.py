@@ -205,6 +205,13 @@ LOW_LOSS = 0.15
 #: projections is stopped and the other Willot operator takes over (it would need > ~400).
 PROBE = (150, 1e-2)
 
+#: With ``green=None`` and ``dtype="complex64"``, a 3-D cell with a low-loss metal beside a
+#: dielectric is solved in complex128 when ``tol`` is below this (reported in ``switches``):
+#: complex64 COCG stalls there above 1e-5 (64³, ε = −50 + 1i in 2.25: Boolean spheres at
+#: 1.07e-5, flakes at 6.3e-5 after 1001 projections), complex128 converges in 118-505
+#: (benchmarks/bench_fft_metals.py).
+COMPLEX64_METAL_TOL = 1e-4
+
 
 def metal_dielectric(table, low_loss: float | None = None) -> bool:
     """True when the phases mix Re ε < 0 (metal-like) with Re ε > 0 at some wavelength; with
@@ -294,7 +301,9 @@ def fft_permittivity(
         two Willot operators, then BiCGStab and GMRES, before raising ConvergenceError; every
         switch is reported in ``result.switches``.
     dtype : {"complex128", "complex64"}
-        Precision of the fields (complex64 halves memory and FFT time).
+        Precision of the fields (complex64 halves memory and FFT time). With ``green=None``,
+        complex64 on a 3-D cell with a low-loss metal and ``tol`` < :data:`COMPLEX64_METAL_TOL`
+        is solved in complex128 instead (complex64 stalls there), reported in ``switches``.
     directions : sequence of int, optional
         Loadings to compute (default all d); other columns of the tensor are NaN.
     warm_start : bool
@@ -358,6 +367,13 @@ def fft_permittivity(
         raise InvalidInputError(f"unknown solver {solver!r}; choose one of {sorted(SOLVERS)}")
     compact, values, counts = _compact_labels(arr)
     table, scalar = _eps_table(values, eps, wavelength_nm)
+    promoted = None
+    if (green is None and dt == np.complex64 and tol < COMPLEX64_METAL_TOL and arr.ndim == 3
+            and metal_dielectric(table, LOW_LOSS)):
+        dt = np.dtype(np.complex128)
+        promoted = {"what": "dtype", "from": "complex64", "to": "complex128",
+                    "reason": f"3-D cell with a low-loss metal: complex64 COCG stalls above tol={tol:g} there "
+                              f"(measured floors 1e-5 to 6e-5); complex128 converges"}
     if wavelength_nm is not None and voxel_nm is not None:
         from nmmm.homogenize.validity import check_quasistatic
 
@@ -376,6 +392,8 @@ def fft_permittivity(
         green, reason = auto_green(arr.ndim, table)
         if green != AUTO_GREEN:
             switches.append({"what": "green", "from": AUTO_GREEN, "to": green, "reason": reason})
+        if promoted is not None:
+            switches.append(promoted)
     op = green_operator(arr.shape, green, spacing=spacing)
     problem = Problem(compact, values.size, op, dt, workers)
     alternative = None  # (Problem with the other Willot operator), built on first need
@@ -470,4 +488,5 @@ def fft_permittivity(
     )
 
 
-__all__ = ["fft_permittivity", "FFTHomogenization", "auto_green", "metal_dielectric", "LOW_LOSS", "PROBE"]
+__all__ = ["fft_permittivity", "FFTHomogenization", "auto_green", "metal_dielectric", "LOW_LOSS", "PROBE",
+           "COMPLEX64_METAL_TOL"]
