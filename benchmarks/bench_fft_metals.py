@@ -74,7 +74,7 @@ def describe_switches(r) -> str:
 
 
 def table(cases, grids, metals, compare: bool, maxiter: int):
-    print(f"\n| cell | grid | ε metal | operator | switches | projections | ≤ 500 | time (s) | ε_xx |")
+    print("\n| cell | grid | ε metal | operator | switches | projections | ≤ 500 | time (s) | ε_xx |")
     print("|---|---|---|---|---|---|---|---|---|")
     for n in grids:
         for case in cases:

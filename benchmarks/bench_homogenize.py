@@ -21,10 +21,16 @@ Usage::
 The machine's cores are shared: ratios measured in the same run are meaningful, absolute
 times less so.
 
+Re-measured 2026-12-02 (benchmarks/run_all.py, medians of 5 alternating runs, load 4-5)
+-------------------------------------------------------------------------------------
+- Iteration / bare FFT pair, 128³ complex64, Boolean spheres: 1.89 at 1 thread, 1.56 at 2
+  threads (issue 22 measured 1.46 at 64³, 1.69 at 128³, 1.31 at 256³). The 1.20 at 128³
+  in the 2026-11-22 list below (best-of rounds) is not reproduced; the target 1.3 is not met.
+
 Measured on the shared 2-core development machine (load average 5-9, 2026-11-22)
 -------------------------------------------------------------------------------------
-- Iteration / bare FFT: 512² 1.88 (c64), 1.63 (c128); 64³ 1.56 / 1.19; 128³ 1.20 / 1.30;
-  in the 128³ totals 1.45 (hematite) and 1.35 (flakes). The element-wise work is 3 fused
+- Iteration / bare FFT (best of rounds): 512² 1.88 (c64), 1.63 (c128); 64³ 1.56 / 1.19;
+  128³ 1.20 / 1.30; in the 128³ totals 1.45 (hematite) and 1.35 (flakes). The element-wise work is 3 fused
   passes (ε p with the direction update, the projection, the COCG update).
 - Projections to 1e-6, 2-D Boolean discs 128², p = 0.3 (COCG / BiCGStab / GMRES(30) /
   Eyre-Milton / Moulinec-Suquet):
@@ -32,7 +38,9 @@ Measured on the shared 2-core development machine (load average 5-9, 2026-11-22)
   Willot 2015 44/67/56/196/>3000; ε = −50+5i: spectral 554/1334/555/701/>3000,
   W2014 39/61/43/707/>3000, W2015 52/90/74/705/>3000; ε = −50+1i: COCG spectral 2012,
   W2014 40, W2015 55; Eyre-Milton (W2015) 3355 (predicted rate |1−√r|/|1+√r| = 0.994).
-- 3-D Boolean spheres 64³ (p = 0.2), ε = −50+2i: COCG 144 projections (rotated operator).
+- 3-D Boolean spheres 64³ (p = 0.2), ε = −50+2i: COCG 144 projections (rotated operator);
+  NOT reproduced since (issue 22: complex64 stalls at 2.9e-4 after 1000; the defaults now
+  take willot2014 in complex128 there, 298 projections, benchmarks/bench_fft_metals.py).
 - Totals, complex64, 3 loadings, tol 1e-5: 128³ hematite-like (10 %, ε = 8+3i in 2.4)
   22 s, 11 projections per loading; 128³ Al flakes (10 %, ε = −50+20i) 262 s, 163/163/114
   projections; peak RSS 481 MiB. 256³, one loading each: hematite 60 s (11 projections,
