@@ -266,6 +266,8 @@ def fft_permittivity(
     periodize: str | None = None,
     workers: int = 2,
     progress: bool | None = None,
+    max_memory_gb: float | None = None,
+    max_minutes: float | None = None,
 ) -> FFTHomogenization:
     """Effective permittivity tensor of a periodic voxel microstructure (FFT, quasi-static).
 
@@ -320,6 +322,11 @@ def fft_permittivity(
         cell periodic (the result is then that of the mirrored cell).
     workers : int
         Threads for scipy.fft and Numba.
+    max_memory_gb, max_minutes : float, optional
+        Limits of the work estimated before the solve starts
+        (:func:`nmmm.homogenize.work_estimate.check_fft_work`; defaults half the physical memory
+        and 30 minutes): beyond them the call is refused with the estimate. ``float('inf')``
+        lifts a limit. A solve estimated above a minute shows a progress bar.
 
     Returns
     -------
@@ -382,6 +389,10 @@ def fft_permittivity(
     dirs = tuple(range(d)) if directions is None else tuple(int(j) for j in directions)
     if not dirs or any(j < 0 or j >= d for j in dirs):
         raise InvalidInputError(f"directions must be axes in 0..{d - 1}, got {directions!r}")
+    from nmmm.homogenize.work_estimate import check_fft_work
+
+    work = check_fft_work(arr.shape, n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt,
+                          metal=metal_dielectric(table), max_memory_gb=max_memory_gb, max_minutes=max_minutes)
     spacing = None
     if voxel_nm is not None:
         spacing = np.broadcast_to(np.asarray(voxel_nm, dtype=float), (d,))
@@ -407,7 +418,8 @@ def fft_permittivity(
     previous = [None] * len(dirs)
     keep_x = warm_start or return_fields
     bar = tqdm(total=nw * len(dirs), desc="FFT homogenization", unit="solve",
-               disable=(nw * len(dirs) < 4) if progress is None else not progress, leave=False)
+               disable=(nw * len(dirs) < 4 and work["seconds"] < 60) if progress is None else not progress,
+               leave=False)
     try:
         for w in range(nw):
             tab = table[w]
