@@ -436,14 +436,18 @@ def write_csv(data: EllipsometryData, path) -> Path:
 
 
 def _write_columns(path: Path, comments, cols, arrs) -> Path:
-    """A CSV of ``#`` comment lines, a header row and columns written with 10 significant digits."""
-    with path.open("w", newline="") as f:
-        for line in comments:
-            f.write(f"# {line}\n")
-        wr = csv.writer(f)
-        wr.writerow(cols)
-        for row in zip(*arrs):
-            wr.writerow([f"{v:.10g}" for v in row])
+    """A CSV of ``#`` comment lines, a header row and columns written with 10 significant digits,
+    written atomically (complete, or the previous file untouched)."""
+    from nmmm.atomic_io import atomic_write_text
+
+    f = io.StringIO(newline="")
+    for line in comments:
+        f.write(f"# {line}\n")
+    wr = csv.writer(f)
+    wr.writerow(cols)
+    for row in zip(*arrs):
+        wr.writerow([f"{v:.10g}" for v in row])
+    atomic_write_text(path, f.getvalue())
     return path
 
 

@@ -9,7 +9,9 @@ Two compressed standard formats, both read by common tools:
 
 The metadata hold ``voxel_nm``, ``phases``, ``periodic``, ``params`` and ``axes``.
 
-- :func:`save_microstructure` — write a :class:`Microstructure` (format from the suffix).
+- :func:`save_microstructure` — write a :class:`Microstructure` (format from the suffix),
+  atomically: a temporary file beside the target replaces it only when complete, so a full disk
+  or a crash never leaves a truncated file under the name (:mod:`nmmm.atomic_io`).
 - :func:`load_microstructure` — read it back (files written by other tools load too:
   a TIFF without nmmm metadata gets voxel 1 nm unless ``voxel_nm`` is given).
 """
@@ -22,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nmmm.atomic_io import atomic_path
 from nmmm.errors import DataFileError, InvalidInputError
 from nmmm.microstructure.base import Microstructure
 
@@ -76,15 +79,17 @@ def save_microstructure(m: Microstructure, path) -> Path:
         arr = lab.T
         vx, vy = m.voxel_nm[0], m.voxel_nm[1]
         try:
-            tifffile.imwrite(
-                p, np.ascontiguousarray(arr), compression="zlib", description=_PREFIX + json.dumps(meta),
-                resolution=(1e3 / vx, 1e3 / vy), resolutionunit=tifffile.RESUNIT.MICROMETER, metadata=None,
-            )
+            with atomic_path(p) as tmp:
+                tifffile.imwrite(
+                    tmp, np.ascontiguousarray(arr), compression="zlib", description=_PREFIX + json.dumps(meta),
+                    resolution=(1e3 / vx, 1e3 / vy), resolutionunit=tifffile.RESUNIT.MICROMETER, metadata=None,
+                )
         except OSError as exc:
             raise DataFileError(f"cannot write {p}: {exc}") from None
     elif suf == ".npz":
         try:
-            np.savez_compressed(p, labels=np.asarray(m.labels), metadata=np.array(json.dumps(meta)))
+            with atomic_path(p) as tmp:
+                np.savez_compressed(tmp, labels=np.asarray(m.labels), metadata=np.array(json.dumps(meta)))
         except OSError as exc:
             raise DataFileError(f"cannot write {p}: {exc}") from None
     else:

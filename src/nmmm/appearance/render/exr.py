@@ -86,10 +86,11 @@ def write_spectral_exr(path, wavelength_nm, values, rgb=None, emissive_units: st
     }
     for k, val in (attributes or {}).items():
         header[str(k)] = str(val)
+    from nmmm.atomic_io import atomic_path
+
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    with OpenEXR.File(header, channels) as f:
-        f.write(str(p))
+    with atomic_path(p) as tmp, OpenEXR.File(header, channels) as f:  # complete or not there at all
+        f.write(str(tmp))
     return p
 
 

@@ -111,9 +111,12 @@ class SpectralImage:
 
         from PIL import Image
 
+        from nmmm.atomic_io import atomic_path
+
         p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(np.round(self.to_display_rgb(colourspace, exposure) * 255).astype(np.uint8)).save(p)
+        img = Image.fromarray(np.round(self.to_display_rgb(colourspace, exposure) * 255).astype(np.uint8))
+        with atomic_path(p) as tmp:  # a full disk or a crash leaves no truncated PNG under the name
+            img.save(tmp, format="PNG")
         return p
 
     def write_exr(self, path, half: bool = False):
