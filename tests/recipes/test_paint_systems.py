@@ -148,3 +148,26 @@ def test_hematite_paint_runs_adding_doubling_and_its_multiangle_base_agrees():
     raw["film"]["solver"] = "km"
     km = compute(parse_recipe(raw), progress=False)
     assert km.scalars["L_D65"] > res.scalars["L_D65"] + 3
+
+
+def test_km_recipe_warns_where_km_is_off():
+    """A recipe that asks for Kubelka-Munk hears how far it is from adding-doubling (issue 24 item 5)."""
+    import warnings
+
+    from nmmm.layers.km_validity import KMAccuracyWarning
+    from nmmm.recipes.run import compute
+
+    raw = _raw("hematite_paint")
+    raw["film"]["solver"] = "km"
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        res = compute(parse_recipe(raw), progress=False)
+    km = [str(r.message) for r in rec if issubclass(r.category, KMAccuracyWarning)]
+    assert len(km) == 1 and "use solver='ad'" in km[0]
+    assert res.scalars["km_vs_ad_delta_e00"] > 1.0
+    raw["film"].pop("solver")  # the default, adding-doubling, is not checked against itself
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        res = compute(parse_recipe(raw), progress=False)
+    assert not [r for r in rec if issubclass(r.category, KMAccuracyWarning)]
+    assert "km_vs_ad_delta_e00" not in res.scalars

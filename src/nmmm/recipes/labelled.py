@@ -56,7 +56,7 @@ ZARR_MIN_POINTS = 1000
 _SUFFIX_UNITS = (("_nm2", "nm2"), ("_nm", "nm"), ("_um", "um"), ("_mm", "mm"), ("_cm", "cm"), ("_deg", "degree"),
                  ("_s", "s"), ("_m2_per_L", "m2 L-1"), ("_pct", "%"))
 _DIMENSIONLESS = ("fraction", "reflectance", "transmittance", "spread", "index", "depth", "roughness",
-                  "contrast_ratio", "mean_primary", "flop_index", "strength")
+                  "contrast_ratio", "mean_primary", "flop_index", "strength", "delta_e00")
 
 
 def units_of_key(key: str) -> str | None:

@@ -189,6 +189,10 @@ def _film(recipe, mats, w, res):
             raise RecipeError(f"film: {exc}") from None
 
     r = paint_reflectance(film(f.substrate_reflectance), w, solver=f.solver, specular=f.specular, quad_pts=f.quad_pts)
+    if f.solver == "km":  # say where Kubelka-Munk is off against adding-doubling (issue 24 item 5)
+        from nmmm.layers.km_validity import check_km_film
+
+        res.scalars["km_vs_ad_delta_e00"] = check_km_film(film(f.substrate_reflectance), w, stacklevel=3)
     label = f"reflectance (substrate {f.substrate_reflectance:g})"
     res.spectra[label] = r.reflectance
     res.primary = label
