@@ -31,7 +31,8 @@ autodoc_mock_imports = ["mitsuba", "drjit"]
 exclude_patterns = ["_build", "gallery/_work", "gallery_figures"]
 templates_path = []
 html_theme = "alabaster"
-html_static_path = []
+html_static_path = ["_static"]
+html_css_files = ["nmmm.css"]  # the gallery description box wraps (docs/_static/nmmm.css)
 html_title = f"nmmm {release}"
 html_theme_options = {"description": "Predictive colour and appearance of paints, from nano to macro",
                       "fixed_sidebar": False, "font_family": "sans-serif", "head_font_family": "sans-serif"}

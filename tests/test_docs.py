@@ -89,3 +89,32 @@ def test_every_internal_link_resolves_in_chromium(built_docs):
     assert not broken_images, broken_images[:10]
     gallery = [f for f in seen if f.parent.name == "gallery" and f.name != "index.html"]
     assert len(gallery) >= 10  # one page per example
+
+
+@pytest.mark.browser
+@pytest.mark.skipif(not CHROMIUM.exists(), reason="needs Debian's chromium at /usr/bin/chromium")
+def test_gallery_description_wraps_inside_its_box(built_docs):
+    """Each gallery page's description (the example's docstring, as text) wraps at the body's width at
+    1366 px: no line of it runs past its box or needs a scroll bar (the listing below may scroll)."""
+    from playwright.sync_api import sync_playwright
+
+    pages = sorted((built_docs / "gallery").glob("*.html"))
+    pages = [f for f in pages if f.name != "index.html"]
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": 1366, "height": 900})
+        bad = []
+        for f in pages:
+            page.goto(f.resolve().as_uri())
+            info = page.evaluate("""() => {
+                const box = document.querySelector('div.nmmm-description');
+                if (!box) return null;
+                const pre = box.querySelector('pre');
+                const body = document.querySelector('div.body').getBoundingClientRect();
+                return {scroll: pre.scrollWidth - pre.clientWidth, right: box.getBoundingClientRect().right - body.right,
+                        text: pre.innerText, page: document.documentElement.scrollWidth};
+            }""")
+            if info is None or info["scroll"] > 1 or info["right"] > 1 or info["page"] > 1366 or "``" in info["text"]:
+                bad.append((f.name, info and {k: v for k, v in info.items() if k != "text"}))
+        browser.close()
+    assert len(pages) >= 10 and bad == []
