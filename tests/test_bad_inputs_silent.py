@@ -4,7 +4,8 @@ clean error or a warning that says what would be right.
 - a coherent 1 m layer in a Stack (aliased fringes): a warning saying the layer should be incoherent;
 - a spectral power file that is all zero (error) or covers only 500-510 nm (warning naming the range);
 - a pairs file whose rendered image is the photograph (same path, a link, or a byte-identical copy): error;
-- ``experiment stats --alpha 2`` : a message naming alpha and its valid range (it said "... got -3.0").
+- ``experiment stats --alpha 2`` : a message naming alpha and its valid range (it said "... got -3.0");
+- a plate render too large for the machine: refused with its memory estimate (unbounded work).
 """
 
 import shutil
@@ -85,3 +86,21 @@ def test_stats_alpha_out_of_range_names_alpha_and_its_range():
             analyse_responses(rows, alpha=alpha)
     with pytest.raises(InvalidInputError, match=r"confidence must be in \(0, 1\)"):
         analyse_responses(rows, confidence=95)
+
+
+def test_plate_render_too_large_is_refused_with_its_estimate():
+    import time
+
+    from nmmm.appearance.render import DirectionalLight, LambertianBRDF, PaintedPlate, PinholeCamera, render_plate
+
+    plate = PaintedPlate(LambertianBRDF(0.5), size_mm=(150, 100))
+    light = DirectionalLight.from_angles(0.0, 0.0, "D65", 1.0)
+    cam = PinholeCamera((0, -100, 400), (0, 0, 0), fov_deg=20, resolution=(200_000, 133_333))
+    t = time.perf_counter()
+    with pytest.raises(InvalidInputError, match=r"200000 x 133333 render at \d+ wavelengths needs about .* GB.*max_memory_gb"):
+        render_plate(plate, cam, light)
+    assert time.perf_counter() - t < 5
+    small = PinholeCamera((0, -100, 400), (0, 0, 0), fov_deg=20, resolution=(64, 43))
+    with pytest.raises(InvalidInputError, match="above the 1e-05 GB limit"):
+        render_plate(plate, small, light, max_memory_gb=1e-5)
+    assert render_plate(plate, small, light).radiance.shape[:2] == (43, 64)

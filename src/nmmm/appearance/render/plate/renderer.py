@@ -84,10 +84,48 @@ def _check_camera(plate: PaintedPlate, camera: PinholeCamera):
         )
 
 
+#: Bytes per pixel and wavelength a render holds at its peak (radiance, smooth and glint parts,
+#: display conversion: float64), plus :data:`RENDER_BYTES_PER_PIXEL` of geometry per pixel.
+RENDER_BYTES_PER_VALUE = 32
+RENDER_BYTES_PER_PIXEL = 400
+
+
+def _half_physical_memory_gb() -> float:
+    import os
+
+    try:
+        return round(0.5 * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 1e9, 1)
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return 8.0
+
+
+#: Default memory limit of one render (GB).
+RENDER_MAX_MEMORY_GB = _half_physical_memory_gb()
+
+
+def _check_render_size(width, height, n_wavelengths, max_memory_gb=None):
+    """Refuse a render whose estimated memory exceeds the limit (issue 21: unbounded work)."""
+    limit = RENDER_MAX_MEMORY_GB if max_memory_gb is None else float(max_memory_gb)
+    pixels = float(width) * float(height)
+    gb = pixels * (RENDER_BYTES_PER_VALUE * n_wavelengths + RENDER_BYTES_PER_PIXEL) / 1e9
+    if gb > limit:
+        raise InvalidInputError(
+            f"a {int(width)} x {int(height)} render at {n_wavelengths} wavelengths needs about {gb:.3g} GB "
+            f"({pixels:.3g} pixels), above the {limit:g} GB limit: lower the camera resolution or the number of "
+            "wavelengths, or raise the limit with render_plate(..., max_memory_gb=)")
+    return gb
+
+
 def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environment=None, wavelength_nm=None,
                  glint_spread_deg: float = 1.0, coarse_step: int = 4, background=None,
-                 randomize_tiles: bool = True, tile_seed: int = 0, area_splat: bool = True) -> SpectralImage:
+                 randomize_tiles: bool = True, tile_seed: int = 0, area_splat: bool = True,
+                 max_memory_gb: float | None = None) -> SpectralImage:
     """Render the spectral radiance image of ``plate`` seen by ``camera``.
+
+    The memory of the render (``RENDER_BYTES_PER_VALUE`` bytes per pixel and wavelength, the
+    per-pixel geometry included) is estimated first; beyond ``max_memory_gb`` (default
+    :data:`RENDER_MAX_MEMORY_GB`, half the physical memory) the call is refused with the
+    estimate instead of exhausting the machine.
 
     Parameters
     ----------
@@ -148,6 +186,7 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
         raise InvalidInputError(f"coarse_step must be >= 1, got {coarse_step!r}")
     Wd, Hd = camera.resolution
     L = w.size
+    _check_render_size(Wd, Hd, L, max_memory_gb)
     hx, hy = plate.size_mm[0] / 2, plate.size_mm[1] / 2
 
     # --- full-resolution geometry: which pixels see the plate
