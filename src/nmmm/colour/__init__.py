@@ -1,7 +1,8 @@
 """nmmm.colour — ground floor: colorimetry used by every scale above.
 
 - :mod:`~nmmm.colour.illuminants` — illuminants (by name, data or values on the grid) and the
-  standard observers with their aliases (``"2"``, ``"10"``).
+  standard observers with their aliases (``"2"``, ``"10"``); industry illuminant names (``F11``,
+  ``TL84``, ``CWF``) through :func:`~nmmm.colour.illuminants.canonical_illuminant`.
 - :mod:`~nmmm.colour.tristimulus` — CIE weighting factors (ASTM E308 through colour-science),
   spectra → XYZ, white point; :func:`as_spectral_distributions` (spectra as colour-science objects).
   Every spectra entry point also takes a ``colour.SpectralDistribution`` /

@@ -42,7 +42,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from nmmm.colour.illuminants import colour_matching_functions, illuminant_on_grid
+from nmmm.colour.illuminants import canonical_illuminant, colour_matching_functions, illuminant_on_grid
 from nmmm.errors import InvalidInputError, OutOfRangeError
 from nmmm.spectra import as_wavelength_nm, check_finite
 
@@ -188,6 +188,7 @@ def weighting_factors(wavelength_nm: ArrayLike, illuminant: str = "D65", observe
     _warn_if_truncated(w, observer)
     if isinstance(illuminant, np.ndarray) or not isinstance(illuminant, str):
         return _weights_cached.__wrapped__(w.tobytes(), w.shape, None, None, illuminant, observer)
+    illuminant = canonical_illuminant(illuminant)  # F11, TL84, CWF ... (nmmm.colour.illuminants)
     return _weights_cached(w.tobytes(), w.shape, _key(illuminant), _key(observer), illuminant, observer)
 
 

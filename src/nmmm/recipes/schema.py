@@ -437,8 +437,10 @@ class Lighting(_Strict):
     def _known(self):
         import colour
 
+        from nmmm.colour.illuminants import canonical_illuminant
+
         for i, name in enumerate(self.illuminants):
-            if name not in colour.SDS_ILLUMINANTS:
+            if canonical_illuminant(name) not in colour.SDS_ILLUMINANTS:  # F11, TL84, CWF accepted
                 close = difflib.get_close_matches(name, list(colour.SDS_ILLUMINANTS), n=3)
                 raise ValueError(f"illuminants[{i}]: unknown illuminant {name!r}" + (f"; close: {close}" if close else ""))
         return self

@@ -157,6 +157,9 @@ def spd(source) -> SpectralPowerDistribution:
         s = str(source)
         import colour
 
+        from nmmm.colour.illuminants import canonical_illuminant
+
+        s = canonical_illuminant(s) if s not in colour.SDS_ILLUMINANTS and not Path(s).exists() else s  # F11, TL84, CWF
         if s in colour.SDS_ILLUMINANTS:
             sd = colour.SDS_ILLUMINANTS[s]
             return SpectralPowerDistribution(np.asarray(sd.wavelengths, float), np.asarray(sd.values, float), name=s)
