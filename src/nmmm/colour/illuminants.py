@@ -64,10 +64,8 @@ def canonical_illuminant(name: str) -> str:
     if not isinstance(name, str):
         return name
     s = name.strip()
-    if s in colour.SDS_ILLUMINANTS:
-        return s
     up = s.upper()
-    for key in colour.SDS_ILLUMINANTS:
+    for key in colour.SDS_ILLUMINANTS:  # its own spelling (colour-science's mapping is case-blind too)
         if key.upper() == up:
             return key
     return ILLUMINANT_ALIASES.get(up, s)
