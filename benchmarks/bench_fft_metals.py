@@ -2,9 +2,10 @@
 
 For each cell (Boolean spheres, hard-core spheres, metal platelets "flakes"), grid and metal
 permittivity in a dielectric of ε = 2.25, the script runs ``fft_permittivity`` with its
-defaults (``green=None``: automatic operator, COCG, fallbacks on), complex64, tol 1e-5, one
-loading (x), and prints one table row: operator used, every automatic switch, projections,
-wall time and ε_xx. With ``--compare`` it also runs COCG with each Willot operator fixed
+defaults (``green=None``: automatic operator, COCG, fallbacks on), complex64 asked, tol 1e-5,
+one loading (x), and prints one table row: operator used, every automatic switch (including
+the promotion to complex128 that ``green=None`` makes for low-loss metals, where complex64
+stalls above 1e-5), projections, wall time and ε_xx. With ``--compare`` it also runs COCG with each Willot operator fixed
 (no fallback) to show what the automatic choice is choosing between.
 
 Usage::
