@@ -45,6 +45,14 @@ def test_recipe_reference_is_generated_from_the_schema(built_docs):
         assert f">{key}<" in html or f"{key}</span>" in html, key
     for key in ("pigment.fraction", "film.thickness_nm", "spectral.step_nm"):
         assert key in html
+    # the explicit units of dispersion coefficients (issue 25 item 4), from the same table the code reads
+    from nmmm.materials.models import EXPLICIT_UNIT_KEYS
+
+    assert "Units of dispersion-model coefficients" in html
+    for keys in EXPLICIT_UNIT_KEYS.values():
+        for key in keys:
+            assert f">{key}<" in html, key
+    assert "µm²" in html and "nm⁴" in html
 
 
 @pytest.mark.browser

@@ -212,7 +212,32 @@ def recipe_reference_rst() -> list[str]:
                 child = f"{key}.NAME" if is_dict else f"{key}[]" if is_list else key
                 todo.append((child, m, f"Entries of ``{key}``."))
         out.append("")
-    return out
+    return out + _dispersion_units_rst()
+
+
+_POWER = {"2": "²", "4": "⁴"}
+
+
+def _dispersion_units_rst() -> list[str]:
+    """The explicit-unit keys of dispersion coefficients (:data:`nmmm.materials.models.EXPLICIT_UNIT_KEYS`)
+    as a table: a compound's ``params`` (and an ellipsometry ``model.toml`` layer) may give them."""
+    from nmmm.materials.models import EXPLICIT_UNIT_KEYS
+
+    title = "Units of dispersion-model coefficients"
+    out = [title, "~" * len(title), "",
+           "Wavelengths are in nm everywhere, but the published Cauchy and Sellmeier coefficients are in "
+           "µm units: the plain keys ``B``, ``C`` of ``compounds.NAME.params`` are read in those µm units. "
+           "Say the unit in the key instead (the shipped recipes do), or give nm units; the value is "
+           "converted to the model's own unit. A coefficient given twice (``B`` and ``B_um2``) is an error.", "",
+           ".. list-table::", "   :header-rows: 1", "", "   * - model", "     - key", "     - coefficient",
+           "     - unit", "     - factor to the model's unit"]
+    for model, keys in EXPLICIT_UNIT_KEYS.items():
+        for key, (coef, factor) in keys.items():
+            base, unit = key.split("_", 1)
+            unit_text = unit[:2].replace("um", "µm") + _POWER.get(unit[2:], unit[2:])
+            out += [f"   * - {model}", f"     - ``{key}``", f"     - ``{coef}``", f"     - {unit_text}",
+                    f"     - {factor:g}"]
+    return out + [""]
 
 
 def _cell(text) -> str:
