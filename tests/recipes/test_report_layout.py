@@ -401,3 +401,27 @@ def test_failed_compare_and_sweep_leave_no_output_folder(tmp_path, monkeypatch):
         warnings.simplefilter("ignore")
         compare_recipes(str(good), str(good), tmp_path / "cmp2", progress=False)
     assert not (tmp_path / "cmp2").exists() or list((tmp_path / "cmp2").iterdir())  # never empty
+
+
+def test_k_axis_starts_at_zero_for_lossless_compounds(tmp_path, monkeypatch):
+    """The n, k plot of a run: k is on a symlog axis that starts at 0 (no negative decades drawn below
+    the k = 0 of lossless TiO2, mica and binder)."""
+    import matplotlib.figure
+
+    from nmmm.recipes.run import run_recipe
+
+    seen = {}
+    real = matplotlib.figure.Figure.savefig
+
+    def record(fig, fname, *a, **k):
+        seen[Path(str(fname)).name] = [ax.get_ylim() for ax in fig.axes]
+        return real(fig, fname, *a, **k)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", record)
+    p = tmp_path / "ip.toml"
+    p.write_text(_dump_toml(fast_raw("interference_pigment", step_nm=20.0)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run_recipe(str(p), tmp_path / "out", progress=False, report=False)
+    (n_lim, k_lim) = seen["nk.png"]
+    assert k_lim[0] == 0.0 and k_lim[1] > 0.0 and n_lim[0] > 1.0

@@ -632,6 +632,7 @@ def _plots(res, out):
         a1.set_ylabel("n (1)")
         a2.set_ylabel("k (1)")
         a2.set_yscale("symlog", linthresh=1e-6)
+        a2.set_ylim(bottom=0.0)  # k >= 0: no negative decades below a lossless compound's k = 0
         for a in (a1, a2):
             a.set_xlabel("wavelength (nm)")
             a.grid(alpha=0.3)
