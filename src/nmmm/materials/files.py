@@ -257,6 +257,9 @@ def read_yaml(path: str | PathLike[str], name: str | None = None) -> Material:
                     rows.append([float(v) for v in line.split()])
                 except ValueError:
                     raise DataFileError(f"{p}: {kind} row {i} ({_shown(line)}) is not numeric") from None
+                if len(rows[-1]) != len(cols) + 1:  # a line cut off (or run on) mid-way
+                    raise DataFileError(f"{p}: {kind} row {i} has {len(rows[-1])} numbers; '{kind}' needs "
+                                        f"{len(cols) + 1} per row (wavelength_um {' '.join(cols)})")
             arr = np.array(rows, dtype=float)
             if arr.ndim != 2 or arr.shape[1] != len(cols) + 1:
                 raise DataFileError(f"{p}: '{kind}' needs {len(cols) + 1} columns per row")
