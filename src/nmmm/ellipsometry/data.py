@@ -293,8 +293,8 @@ def _scan_rows(path, rows, line_nos, min_fields: int, strict: bool, used=(0, 1, 
                 dropped_truncated=tuple(int(n) for n in np.asarray(line_nos)[trunc]))
     if strict and (info["dropped_nonfinite"] or info["dropped_truncated"]):
         scan = DataScan(str(path), int(keep.sum()), **info)
-        raise DataFileError(f"{path}: " + "; ".join(scan.problems) + " (strict: fix the file, or run without "
-                            "--strict to leave these rows out)")
+        raise DataFileError(f"{path}: " + "; ".join(q.replace(" left out", "") for q in scan.problems)
+                            + " (strict: fix the file, or run without --strict to leave these rows out)")
     if not keep.any():
         raise DataFileError(f"{path}: no complete, finite data row (" +
                             "; ".join(DataScan(str(path), 0, **info).problems) + ")")
