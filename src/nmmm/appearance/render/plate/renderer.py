@@ -15,7 +15,7 @@ from nmmm.appearance.render.lights import (
     UniformEnvironment,
     default_wavelengths,
 )
-from nmmm.appearance.render.plate.coarse_grid import _bilinear
+from nmmm.appearance.render.plate.coarse_grid import _bilinear, accumulate_light, add_environment
 from nmmm.appearance.render.plate.environment import _envmap_smooth, _mirror_env
 from nmmm.appearance.render.plate.glints import _render_glints
 from nmmm.appearance.render.plate.scene import PaintedPlate
@@ -213,19 +213,19 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     wo[~chit] = (0.0, 0.0, 1.0)
     wo[:, 2] = np.maximum(wo[:, 2], 0.0)
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
-    coarse = np.zeros((cd.shape[0], L))
+    coarse = np.zeros((cd.shape[0], L), np.float32)
     comps = ("specular", "base", "multiple") if plate.flakes is not None else ("specular", "flakes", "base", "multiple")
+    first = True
     for lt, sp in zip(lights, spectra):
         wi, s = _light_at(lt, cP)
-        f = brdf.evaluate(w, wi, wo, components=comps)
-        coarse += f * s[:, None] * sp[None, :]
+        accumulate_light(coarse, brdf.evaluate(w, wi, wo, components=comps), s, sp, first)
+        first = False
     if env is not None:
-        coarse += brdf.albedo(w, wo) * env[None, :]
+        add_environment(coarse, brdf, w, wo, env, first)
     coarse[~chit] = 0.0
     coarse = coarse.reshape(rows.size, cols.size, L)
     if envmap is not None:
         coarse += _envmap_smooth(brdf, w, envmap, wo.reshape(rows.size, cols.size, 3), chit.reshape(rows.size, cols.size))
-    coarse = coarse.astype(np.float32)
     if rows.size == 1:
         coarse = np.concatenate([coarse, coarse], axis=0)
         rows = np.r_[rows, rows + 1]
