@@ -341,13 +341,10 @@ class SubstrateSpec(_Strict):
     @field_validator("reflectance")
     @classmethod
     def _reflectance_factor(cls, v):
-        values = [v] if isinstance(v, float) else v
-        if values is not None:
-            for i, r in enumerate(values):
-                if not (math.isfinite(r) and 0.0 <= r <= 1.0):
-                    where = "" if isinstance(v, float) else f" (item {i})"
-                    raise ValueError(f"a reflectance factor must be in [0, 1] (not percent: 85 % is 0.85); "
-                                     f"got {r!r}{where}")
+        for i, r in enumerate([v] if isinstance(v, float) else v):
+            if not (math.isfinite(r) and 0.0 <= r <= 1.0):
+                where = "" if isinstance(v, float) else f" (item {i})"
+                raise ValueError(f"a reflectance factor must be in [0, 1] (not percent: 85 % is 0.85); got {r!r}{where}")
         return v
 
     @model_validator(mode="after")
