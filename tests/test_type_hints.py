@@ -12,13 +12,8 @@ import pytest
 PACKAGES = ["nmmm.spectra", "nmmm.colour", "nmmm.materials", "nmmm.ema", "nmmm.layers"]
 
 NOT_YET_ANNOTATED = {
-    "nmmm.materials.kreibig_damped_eps",  # TODO(R): nmmm/materials/size_damping.py
-    "nmmm.materials.size_damped",  # TODO(R): nmmm/materials/size_damping.py
     "nmmm.ema.bruggeman",  # TODO(N): nmmm/ema/bruggeman_rule.py
     "nmmm.ema.bruggeman_residual",  # TODO(N): nmmm/ema/bruggeman_rule.py
-    "nmmm.layers.mie",  # TODO(R): nmmm/layers/mie_scattering.py
-    "nmmm.layers.mie_coated",  # TODO(R): nmmm/layers/mie_scattering.py
-    "nmmm.layers.mie_multilayer",  # TODO(R): nmmm/layers/mie_scattering.py
 }
 
 

@@ -50,6 +50,7 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.fresnel_equations import medium_nk
@@ -638,7 +639,8 @@ def _run(m_layers, x_layers, shape, angles_deg, diameter_nm, wavelength_nm, n_me
     )
 
 
-def mie_multilayer(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg=None) -> MieResult:
+def mie_multilayer(n_layers: ArrayLike, n_medium: ArrayLike, diameters_nm: ArrayLike, wavelength_nm: ArrayLike,
+                   angles_deg: ArrayLike | None = None) -> MieResult:
     """Mie efficiencies of concentric multilayer spheres (Yang 2003).
 
     Parameters
@@ -734,7 +736,8 @@ def _mie_layers(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg, nam
     return _run(m, x, shape, _angles(angles_deg), ds[-1], w, nm)
 
 
-def mie(n_particle, n_medium, diameter_nm, wavelength_nm, angles_deg=None) -> MieResult:
+def mie(n_particle: ArrayLike, n_medium: ArrayLike, diameter_nm: ArrayLike, wavelength_nm: ArrayLike,
+        angles_deg: ArrayLike | None = None) -> MieResult:
     """Mie efficiencies of homogeneous spheres in a non-absorbing host.
 
     All array arguments broadcast together (NumPy rules); for a wavelength × diameter grid
@@ -778,7 +781,8 @@ def mie(n_particle, n_medium, diameter_nm, wavelength_nm, angles_deg=None) -> Mi
     return _mie_layers([n_particle], n_medium, [diameter_nm], wavelength_nm, angles_deg, [("n_particle", "diameter_nm")])
 
 
-def mie_coated(n_core, n_shell, n_medium, core_diameter_nm, diameter_nm, wavelength_nm, angles_deg=None) -> MieResult:
+def mie_coated(n_core: ArrayLike, n_shell: ArrayLike, n_medium: ArrayLike, core_diameter_nm: ArrayLike,
+               diameter_nm: ArrayLike, wavelength_nm: ArrayLike, angles_deg: ArrayLike | None = None) -> MieResult:
     """Mie efficiencies of core–shell spheres (Bohren & Huffman §8.1; Yang 2003).
 
     ``core_diameter_nm`` < ``diameter_nm`` (outer); efficiencies refer to the outer sphere.

@@ -57,6 +57,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.materials.material import DerivedMaterial, Material, as_material
@@ -105,7 +106,8 @@ def _parameters(metal) -> FreeElectronParameters:
             "reference=...)") from None
 
 
-def kreibig_damped_eps(eps_bulk, wavelength_nm, radius_nm, *, A: float = 1.0, metal="gold"):
+def kreibig_damped_eps(eps_bulk: ArrayLike, wavelength_nm: ArrayLike, radius_nm: ArrayLike, *, A: float = 1.0,
+                       metal: str = "gold") -> np.ndarray:
     """ε of a metal sphere of radius R with surface-scattering damping (Kreibig model).
 
     Parameters
@@ -149,7 +151,7 @@ def kreibig_damped_eps(eps_bulk, wavelength_nm, radius_nm, *, A: float = 1.0, me
     return np.asarray(eps_bulk, dtype=complex) + wp2 / (E * E + 1j * p.gamma_bulk_ev * E) - wp2 / (E * E + 1j * gamma_r * E)
 
 
-def size_damped(material, radius_nm: float, *, A: float = 1.0, metal="gold") -> Material:
+def size_damped(material: Material | str, radius_nm: float, *, A: float = 1.0, metal: str = "gold") -> Material:
     """``material`` (bulk metal: Material or database key) with the Kreibig damping of a sphere of
     radius ``radius_nm``, as a Material over the same wavelength range.
 
