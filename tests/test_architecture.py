@@ -16,7 +16,7 @@ ROOT = SRC / "nmmm"
 
 #: the floors, bottom first: a module may import from its own floor and the floors below it
 FLOORS = ("errors", "spectra", "atomic_io", "html_repr", "colour", "materials", "ema", "microstructure", "homogenize", "layers",
-          "ellipsometry", "appearance", "experiment", "recipes", "demo", "cli")
+          "ellipsometry", "appearance", "experiment", "recipes", "matching", "demo", "cli")
 MAX_LINES = 800
 
 

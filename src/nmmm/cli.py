@@ -29,6 +29,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("nmmm.demo.cli:demo", "Run the seed paper's worked examples into one report."),
     "compare": ("nmmm.recipes.cli:compare", "Compare two recipes (substitution view)."),
     "sweep": ("nmmm.recipes.cli:sweep", "Parameter sweep of a recipe on Dask."),
+    "match": ("nmmm.matching.cli:match", "Match a recipe's free keys to a measured colour."),
 }
 
 

@@ -1,0 +1,44 @@
+"""nmmm.matching — from a measured colour to a recipe: measured files, metamerism, matching.
+
+Floor: above :mod:`nmmm.recipes` (a match varies a recipe's keys and runs its coat stack), below
+:mod:`nmmm.demo` and the CLI. The measured-file readers live here rather than on the ground
+floor because only matching (and later calibration) consumes them.
+
+- :mod:`~nmmm.matching.measured_files` — CGATS.17, CxF3 and CSV spectra in and out
+  (:class:`MeasuredSpectra`, :func:`read_measured`, :func:`write_cgats`, :func:`write_cxf`).
+- :mod:`~nmmm.matching.metamerism` — the CIEDE2000 residual vector and the CIE special
+  metamerism index for a change of illuminant.
+- :mod:`~nmmm.matching.recipe_match` — :func:`match_recipe` over a :class:`RecipeModel`.
+- :mod:`~nmmm.matching.outputs` — the ``nmmm match`` result folder.
+"""
+
+from nmmm.matching.measured_files import (
+    MeasuredSpectra,
+    cxf_geometries,
+    read_cgats,
+    read_cxf,
+    read_measured,
+    read_spectra_csv,
+    write_cgats,
+    write_cxf,
+)
+from nmmm.matching.metamerism import delta_e2000_residuals, delta_lch, metamerism_index
+from nmmm.matching.recipe_match import MatchResult, RecipeModel, match_recipe, parse_bound
+
+__all__ = [
+    "MatchResult",
+    "MeasuredSpectra",
+    "RecipeModel",
+    "cxf_geometries",
+    "delta_e2000_residuals",
+    "delta_lch",
+    "match_recipe",
+    "metamerism_index",
+    "parse_bound",
+    "read_cgats",
+    "read_cxf",
+    "read_measured",
+    "read_spectra_csv",
+    "write_cgats",
+    "write_cxf",
+]

@@ -1,0 +1,70 @@
+"""``nmmm match TARGET RECIPE --vary KEY=LO:HI … -o OUT``: a recipe matched to a measured colour."""
+
+from __future__ import annotations
+
+import click
+
+__all__ = ["match"]
+
+
+def _target(target: str, unit: str, geometry, sample):
+    """(spectra or None, lab or None, name) of a TARGET argument: a measured file or ``lab:L,a,b``."""
+    from nmmm.errors import InvalidInputError
+    from nmmm.matching.measured_files import read_measured
+
+    if target.lower().startswith("lab:"):
+        try:
+            lab = [float(v) for v in target[4:].split(",")]
+        except ValueError:
+            lab = []
+        if len(lab) != 3:
+            raise InvalidInputError(f"TARGET {target!r}: write lab:L,a,b (three numbers, e.g. lab:45,30,25)")
+        return None, lab, target
+    ms = read_measured(target, unit=unit, geometry=geometry)
+    name = ms.names[0] if sample is None else sample
+    return ms, None, name
+
+
+@click.command("match")
+@click.argument("target")
+@click.argument("recipe")
+@click.option("--vary", "varies", multiple=True, required=True, metavar="KEY=LO:HI",
+              help="A free key of the recipe and its bounds (repeat): pigments.0.fraction=0:0.2, film.thickness_nm=2e4:8e4.")
+@click.option("-o", "--output", default=None, help="Result folder (default match-<recipe>).")
+@click.option("--mode", type=click.Choice(["colorimetric", "spectral"]), default="colorimetric", show_default=True)
+@click.option("-i", "--illuminant", default="D65", show_default=True, help="Primary illuminant (F11, TL84, CWF accepted).")
+@click.option("-t", "--test-illuminant", "tests", multiple=True, default=("A", "F11"), show_default=True,
+              help="Illuminants of the metamerism index (repeat).")
+@click.option("--metamerism-weight", default=0.0, show_default=True, type=click.FloatRange(min=0),
+              help="Penalty weight of the metamerism index in a colorimetric match.")
+@click.option("--sample", default=None, help="Which sample of a multi-sample file (default: the first).")
+@click.option("--geometry", default=None, help="Which geometry of a multi-angle CxF3 file.")
+@click.option("--percent", is_flag=True, help="The file's reflectances are in percent (0-100).")
+@click.option("--no-progress", is_flag=True)
+def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_weight, sample, geometry, percent, no_progress):
+    """Match RECIPE's free keys (--vary) to TARGET: a CGATS.17 / CxF3 / CSV file, or lab:L,a,b."""
+    import warnings
+    from pathlib import Path
+
+    from nmmm.matching.outputs import write_match_outputs
+    from nmmm.matching.recipe_match import RecipeModel, match_recipe
+
+    ms, lab, name = _target(target, "percent" if percent else "auto", geometry, sample)
+    model = RecipeModel(recipe, varies)
+    R = None
+    if ms is not None:
+        ms.spectrum(name)  # an unknown --sample names the file's samples
+        R = ms.on_grid(model.wavelength_nm)[ms.names.index(name)]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = match_recipe(model, R, lab, mode=mode, illuminant=illuminant, test_illuminants=tests,
+                           metamerism_weight=metamerism_weight, progress=not no_progress)
+    for w in caught:
+        click.echo(f"warning: {w.message}", err=True)
+    out = Path(output) if output else Path(f"match-{Path(recipe).stem}")
+    files = write_match_outputs(res, out, name)
+    click.echo("  ".join(f"{k} = {v:.5g}" for k, v in res.values.items()))
+    click.echo(f"dE00 = {res.de00:.4f} under {res.illuminant}; metamerism index "
+               + (", ".join(f"{k} {v:.3f}" for k, v in res.metamerism.items()) or "n/a")
+               + f"; {sum(res.evaluations.values())} model evaluations in {res.time_s:.1f} s")
+    click.echo(f"results: {files['matches'].parent.resolve()}")

@@ -1,0 +1,415 @@
+"""Measured reflectance spectra in and out: CGATS.17 text, CxF3 XML and CSV.
+
+- :class:`MeasuredSpectra` — spectra (N samples × W wavelengths, reflectance factor in [0, 1]),
+  sample names, the instrument geometry and the file's keywords.
+- :func:`read_cgats`, :func:`write_cgats` — CGATS.17 (ASTM E1708 / ISO 28178) text with
+  ``SPECTRAL_NM<λ>`` fields (``SPECTRAL_<λ>``, ``NM<λ>``, ``R<λ>`` also read), keyword
+  ``MEASUREMENT_GEOMETRY``.
+- :func:`read_cxf`, :func:`write_cxf`, :func:`cxf_geometries` — CxF3 (ISO 17972-1): each
+  ``Object``'s ``ReflectanceSpectrum`` with its ``ColorSpecification`` (wavelength start and
+  increment, geometry from ``SingleAngle`` illumination/measurement angles or ``Geometry`` text);
+  a multi-angle file holds one specification per angle, and one geometry is read at a time.
+- :func:`read_spectra_csv` — ``wavelength_nm,<sample>,<sample>…`` (a column per sample).
+- :func:`read_measured` — any of them by the file's suffix.
+
+Units. A file holds reflectance factors (0–1) or percent (0–100). ``unit="auto"`` reads factors
+and refuses values above 1.5 as "percent, not factors" (a measured factor reaches ~1.1 at most
+for fluorescent whites), never rescaling silently; ``unit="percent"`` says so and divides by
+100. CGATS's ``SPECTRAL_NORM`` keyword (100 or 1, as X-Rite writes it) declares it too.
+
+Why not colour-science's readers: ``colour.read_sds_from_xrite_file`` reads X-Rite's CGATS
+dialect but drops the geometry and keywords and does not see a truncated data block; colour-science
+has no CxF reader in its core package (``colour-cxf`` is separate and not a dependency). The
+spectra are handed to colour-science as ``SpectralDistribution`` objects
+(:meth:`MeasuredSpectra.to_colour`).
+
+References
+----------
+- ISO 28178:2009 Graphic technology — Exchange format for colour and process control data using
+  XML or ASCII text (CGATS.17); ASTM E1708-95 Standard practice for electronic interchange of
+  color and appearance data.
+- ISO 17972-1:2015 Graphic technology — Colour data exchange format — Part 1: Relationship to CxF3.
+"""
+
+from __future__ import annotations
+
+import re
+import shlex
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from nmmm.errors import DataFileError, InvalidInputError
+
+__all__ = ["MeasuredSpectra", "read_cgats", "write_cgats", "read_cxf", "write_cxf", "cxf_geometries",
+           "read_spectra_csv", "read_measured", "PERCENT_THRESHOLD"]
+
+#: a reflectance factor above this is read as percent (and refused under ``unit="auto"``)
+PERCENT_THRESHOLD = 1.5
+CXF_NS = "http://colorexchangeformat.com/CxF3-core"
+_UNITS = ("auto", "fraction", "percent")
+
+
+@dataclass(frozen=True)
+class MeasuredSpectra:
+    """Reflectance spectra of N samples on one wavelength grid, with their geometry."""
+
+    wavelength_nm: np.ndarray
+    reflectance: np.ndarray  # (N, W), factors in [0, ~1.1]
+    names: tuple
+    geometry: str | None = None
+    metadata: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        w = np.asarray(self.wavelength_nm, float)
+        r = np.atleast_2d(np.asarray(self.reflectance, float))
+        if w.ndim != 1 or w.size < 2 or np.any(np.diff(w) <= 0):
+            raise InvalidInputError("wavelength_nm must be 1-D and increasing, at least 2 values")
+        if r.shape[-1] != w.size:
+            raise InvalidInputError(f"reflectance has {r.shape[-1]} values per sample, the grid {w.size}")
+        if len(self.names) != r.shape[0]:
+            raise InvalidInputError(f"{len(self.names)} names for {r.shape[0]} samples")
+        object.__setattr__(self, "wavelength_nm", w)
+        object.__setattr__(self, "reflectance", r)
+        object.__setattr__(self, "names", tuple(str(n) for n in self.names))
+
+    def __len__(self) -> int:
+        return self.reflectance.shape[0]
+
+    def spectrum(self, name_or_index=0) -> np.ndarray:
+        """One sample's spectrum, by name or index."""
+        if isinstance(name_or_index, str):
+            if name_or_index not in self.names:
+                raise InvalidInputError(f"no sample {name_or_index!r}; the file has {list(self.names)[:10]}")
+            return self.reflectance[self.names.index(name_or_index)]
+        return self.reflectance[int(name_or_index)]
+
+    def on_grid(self, wavelength_nm) -> np.ndarray:
+        """The spectra interpolated (linearly) onto ``wavelength_nm``, which they must cover."""
+        w = np.asarray(wavelength_nm, float)
+        lo, hi = self.wavelength_nm[0], self.wavelength_nm[-1]
+        if w[0] < lo - 1e-9 or w[-1] > hi + 1e-9:
+            raise InvalidInputError(f"the measured spectra cover {lo:g}–{hi:g} nm; the grid needs {w[0]:g}–{w[-1]:g} nm "
+                                    "(narrow the recipe's [spectral] range)")
+        return np.stack([np.interp(w, self.wavelength_nm, r) for r in self.reflectance])
+
+    def to_colour(self):
+        """colour-science ``MultiSpectralDistributions`` (labels = sample names)."""
+        import colour
+
+        return colour.MultiSpectralDistributions(self.reflectance.T, self.wavelength_nm, labels=list(self.names))
+
+
+def _scaled(values: np.ndarray, unit: str, where: str) -> np.ndarray:
+    if unit not in _UNITS:
+        raise InvalidInputError(f"unit must be one of {_UNITS}, got {unit!r}")
+    if not np.all(np.isfinite(values)):
+        raise DataFileError(f"{where}: a spectral value is not a finite number")
+    if unit == "percent":
+        return values / 100.0
+    top = float(values.max()) if values.size else 0.0
+    if top > PERCENT_THRESHOLD:
+        raise DataFileError(f"{where}: reflectance up to {top:g} — these look like percent, not factors (0-1); "
+                            "read with unit='percent' (CLI --percent) to divide by 100, or fix the file")
+    if float(values.min()) < -0.05:
+        raise DataFileError(f"{where}: reflectance down to {float(values.min()):g} < 0; a measured reflectance factor is >= 0")
+    return values
+
+
+_SPECTRAL_FIELD = re.compile(r"^(?:SPECTRAL_NM_?|SPECTRAL_|NM_?|R_?)(\d+(?:\.\d+)?)$", re.IGNORECASE)
+
+
+def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
+    """A CGATS.17 file's spectral fields (module docstring)."""
+    p = Path(path)
+    text = p.read_text(encoding="utf-8-sig", errors="strict")
+    lines = [ln.strip() for ln in text.splitlines()]
+    keywords, fields, rows = {}, None, []
+    state = "header"
+    for no, ln in enumerate(lines, 1):
+        if not ln or ln.startswith("#"):
+            continue
+        if state == "header":
+            if ln.upper() == "BEGIN_DATA_FORMAT":
+                state, fields = "format", []
+            elif ln.upper() == "BEGIN_DATA":
+                raise DataFileError(f"{p.name}: line {no}: BEGIN_DATA before BEGIN_DATA_FORMAT; a CGATS file names its fields first")
+            else:
+                key, _, val = ln.partition(" ")
+                keywords[key.upper()] = val.strip().strip('"')
+        elif state == "format":
+            if ln.upper() == "END_DATA_FORMAT":
+                state = "between"
+            else:
+                fields += ln.split()
+        elif state == "between":
+            if ln.upper() == "BEGIN_DATA":
+                state = "data"
+            else:
+                key, _, val = ln.partition(" ")
+                keywords[key.upper()] = val.strip().strip('"')
+        elif state == "data":
+            if ln.upper() == "END_DATA":
+                state = "done"
+                break
+            try:
+                rows.append((no, shlex.split(ln)))
+            except ValueError:
+                raise DataFileError(f"{p.name}: line {no}: an unclosed quote") from None
+    if fields is None:
+        raise DataFileError(f"{p.name}: no BEGIN_DATA_FORMAT block; not a CGATS.17 file")
+    if state != "done":
+        raise DataFileError(f"{p.name}: truncated — no END_DATA after {len(rows)} data rows (the file ends inside "
+                            f"the {'data' if state == 'data' else 'header'} block)")
+    declared = keywords.get("NUMBER_OF_SETS")
+    if declared is not None and declared.isdigit() and int(declared) != len(rows):
+        raise DataFileError(f"{p.name}: NUMBER_OF_SETS says {declared} samples, the data block has {len(rows)} (truncated?)")
+    spec = [(i, float(m.group(1))) for i, f in enumerate(fields) if (m := _SPECTRAL_FIELD.match(f))]
+    if not spec:
+        raise DataFileError(f"{p.name}: no spectral fields (SPECTRAL_NM400 …) among {fields[:8]}; only spectra can be "
+                            "matched — export the spectral data from the instrument")
+    name_col = next((fields.index(k) for k in ("SAMPLE_NAME", "SAMPLE_ID") if k in fields), None)
+    vals, names = [], []
+    for no, r in rows:
+        if len(r) != len(fields):
+            raise DataFileError(f"{p.name}: line {no}: {len(r)} values for {len(fields)} fields (truncated or misquoted row)")
+        try:
+            vals.append([float(r[i]) for i, _ in spec])
+        except ValueError:
+            raise DataFileError(f"{p.name}: line {no}: a spectral value is not a number") from None
+        names.append(r[name_col] if name_col is not None else f"sample {len(names) + 1}")
+    norm = keywords.get("SPECTRAL_NORM")
+    if unit == "auto" and norm is not None:
+        try:
+            unit = "percent" if abs(float(norm) - 100) < 1e-9 else "fraction" if abs(float(norm) - 1) < 1e-9 else unit
+        except ValueError:
+            pass
+    order = np.argsort([w for _, w in spec])
+    w = np.array([spec[i][1] for i in order])
+    R = _scaled(np.array(vals, float)[:, order] if vals else np.zeros((0, w.size)), unit, p.name)
+    if R.shape[0] == 0:
+        raise DataFileError(f"{p.name}: the data block holds no samples")
+    geo = keywords.get("MEASUREMENT_GEOMETRY") or keywords.get("GEOMETRY")
+    return MeasuredSpectra(w, R, tuple(names), geo, keywords)
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.6f}"
+
+
+def write_cgats(path, spectra: MeasuredSpectra, originator: str = "nmmm") -> Path:
+    """CGATS.17 text (factors, ``SPECTRAL_NORM 1``), atomically."""
+    from nmmm.atomic_io import atomic_write_text
+
+    w = spectra.wavelength_nm
+    fields = ["SAMPLE_ID", "SAMPLE_NAME"] + [f"SPECTRAL_NM{x:g}" for x in w]
+    out = ["CGATS.17", f'ORIGINATOR "{originator}"', 'DESCRIPTOR "reflectance factor"']
+    if spectra.geometry:
+        out.append(f'MEASUREMENT_GEOMETRY "{spectra.geometry}"')
+    out += ["SPECTRAL_NORM 1", f"NUMBER_OF_FIELDS {len(fields)}", "BEGIN_DATA_FORMAT", " ".join(fields), "END_DATA_FORMAT",
+            f"NUMBER_OF_SETS {len(spectra)}", "BEGIN_DATA"]
+    for i, (name, r) in enumerate(zip(spectra.names, spectra.reflectance), 1):
+        safe = name.replace('"', "'")
+        out.append(f'{i} "{safe}" ' + " ".join(_fmt(v) for v in r))
+    out.append("END_DATA")
+    atomic_write_text(path, "\n".join(out) + "\n")
+    return Path(path)
+
+
+# ---------------------------------------------------------------------------------------- CxF3
+
+
+def _local(tag: str) -> str:
+    return tag.rsplit("}", 1)[-1]
+
+
+def _find(el, name):
+    return next((c for c in el.iter() if _local(c.tag) == name), None)
+
+
+def _geometry_of_spec(spec) -> str | None:
+    single = _find(spec, "SingleAngle")
+    if single is not None:
+        ill, meas = _find(single, "IlluminationAngle"), _find(single, "MeasurementAngle")
+        if ill is not None and meas is not None:
+            return f"{float(ill.text):g}:{float(meas.text):g}"
+    g = _find(spec, "Geometry")
+    if g is not None and (g.text or "").strip():
+        return g.text.strip()
+    return None
+
+
+def _cxf_tree(p: Path):
+    try:
+        root = ET.parse(p).getroot()
+    except ET.ParseError as exc:
+        raise DataFileError(f"{p.name}: not well-formed XML ({exc}); a truncated CxF3 file?") from None
+    if _local(root.tag) != "CxF":
+        raise DataFileError(f"{p.name}: the root element is <{_local(root.tag)}>, a CxF3 file's is <cc:CxF>")
+    specs = {}
+    for s in root.iter():
+        if _local(s.tag) == "ColorSpecification":
+            wr = _find(s, "WavelengthRange")
+            specs[s.get("Id")] = dict(geometry=_geometry_of_spec(s),
+                                      start=float(wr.get("StartWL")) if wr is not None and wr.get("StartWL") else None,
+                                      increment=float(wr.get("Increment")) if wr is not None and wr.get("Increment") else None)
+    return root, specs
+
+
+def _cxf_samples(p: Path):
+    root, specs = _cxf_tree(p)
+    out = []
+    for obj in root.iter():
+        if _local(obj.tag) != "Object":
+            continue
+        for rs in obj.iter():
+            if _local(rs.tag) != "ReflectanceSpectrum":
+                continue
+            sp = specs.get(rs.get("ColorSpecification"), {})
+            start = rs.get("StartWL") or sp.get("start")
+            inc = rs.get("Increment") or sp.get("increment") or 10.0
+            if start is None:
+                raise DataFileError(f"{p.name}: object {obj.get('Name')!r}: a ReflectanceSpectrum without StartWL")
+            try:
+                v = np.array([float(x) for x in (rs.text or "").split()])
+            except ValueError:
+                raise DataFileError(f"{p.name}: object {obj.get('Name')!r}: a spectral value is not a number") from None
+            out.append((obj.get("Name") or obj.get("Id") or f"object {len(out) + 1}", sp.get("geometry"),
+                        float(start) + float(inc) * np.arange(v.size), v))
+    if not out:
+        raise DataFileError(f"{p.name}: no ReflectanceSpectrum in any Object; only spectra can be matched")
+    return out
+
+
+def cxf_geometries(path) -> list:
+    """The geometries (``"45:0"``, ``"45:-15"`` …, or None) of a CxF3 file's spectra, in file order."""
+    seen = []
+    for _, g, _, _ in _cxf_samples(Path(path)):
+        if g not in seen:
+            seen.append(g)
+    return seen
+
+
+def read_cxf(path, geometry: str | None = None, unit: str = "auto") -> MeasuredSpectra:
+    """The spectra of a CxF3 file measured at one geometry (needed when the file has several)."""
+    p = Path(path)
+    samples = _cxf_samples(p)
+    geos = []
+    for _, g, _, _ in samples:
+        if g not in geos:
+            geos.append(g)
+    if geometry is None and len(geos) > 1:
+        raise DataFileError(f"{p.name}: spectra at {len(geos)} geometries {geos}; a spectrum set is one geometry — "
+                            "choose one (geometry=..., CLI --geometry)")
+    want = geos[0] if geometry is None else geometry
+    chosen = [s for s in samples if s[1] == want]
+    if not chosen:
+        raise DataFileError(f"{p.name}: no spectra at geometry {geometry!r}; the file has {geos}")
+    w = chosen[0][2]
+    for name, _, wi, _ in chosen:
+        if wi.size != w.size or not np.allclose(wi, w):
+            raise DataFileError(f"{p.name}: object {name!r} is on another wavelength grid ({wi[0]:g}–{wi[-1]:g} nm, "
+                                f"{wi.size} values) than the first ({w[0]:g}–{w[-1]:g} nm, {w.size})")
+    R = _scaled(np.stack([v for *_, v in chosen]), unit, p.name)
+    return MeasuredSpectra(w, R, tuple(n for n, *_ in chosen), want, {"geometries": geos})
+
+
+def _geometry_xml(spec_el, geometry: str | None):
+    m = re.fullmatch(r"\s*(-?\d+(?:\.\d+)?)\s*:\s*(-?\d+(?:\.\d+)?)\s*", geometry or "")
+    ms = ET.SubElement(spec_el, f"{{{CXF_NS}}}MeasurementSpec")
+    ET.SubElement(ms, f"{{{CXF_NS}}}MeasurementType").text = "Spectrum_Reflectance"
+    gc = ET.SubElement(ms, f"{{{CXF_NS}}}GeometryChoice")
+    if m:
+        sa = ET.SubElement(gc, f"{{{CXF_NS}}}SingleAngle")
+        ET.SubElement(sa, f"{{{CXF_NS}}}IlluminationAngle").text = m.group(1)
+        ET.SubElement(sa, f"{{{CXF_NS}}}MeasurementAngle").text = m.group(2)
+    elif geometry:
+        ET.SubElement(gc, f"{{{CXF_NS}}}Geometry").text = geometry
+    return ms
+
+
+def write_cxf(path, spectra, creator: str = "nmmm") -> Path:
+    """CxF3 XML of one :class:`MeasuredSpectra` or several (one per geometry: a multi-angle set
+    whose objects share names), atomically. The grid must be uniform."""
+    from nmmm.atomic_io import atomic_write_bytes
+
+    sets = [spectra] if isinstance(spectra, MeasuredSpectra) else list(spectra)
+    ET.register_namespace("cc", CXF_NS)
+    root = ET.Element(f"{{{CXF_NS}}}CxF")
+    info = ET.SubElement(root, f"{{{CXF_NS}}}FileInformation")
+    ET.SubElement(info, f"{{{CXF_NS}}}Creator").text = creator
+    res = ET.SubElement(root, f"{{{CXF_NS}}}Resources")
+    coll = ET.SubElement(res, f"{{{CXF_NS}}}ObjectCollection")
+    objects = {}
+    cs_coll = ET.SubElement(res, f"{{{CXF_NS}}}ColorSpecificationCollection")
+    for k, s in enumerate(sets):
+        d = np.diff(s.wavelength_nm)
+        if not np.allclose(d, d[0]):
+            raise InvalidInputError("CxF3 spectra need a uniform wavelength grid (StartWL + Increment)")
+        sid = f"CS{k + 1}"
+        cs = ET.SubElement(cs_coll, f"{{{CXF_NS}}}ColorSpecification", Id=sid)
+        ms = _geometry_xml(cs, s.geometry)
+        ET.SubElement(ms, f"{{{CXF_NS}}}WavelengthRange", StartWL=f"{s.wavelength_nm[0]:g}", Increment=f"{d[0]:g}")
+        for name, r in zip(s.names, s.reflectance):
+            if name not in objects:
+                obj = ET.SubElement(coll, f"{{{CXF_NS}}}Object", ObjectType="Standard", Name=name, Id=str(len(objects) + 1))
+                objects[name] = ET.SubElement(obj, f"{{{CXF_NS}}}ColorValues")
+            rs = ET.SubElement(objects[name], f"{{{CXF_NS}}}ReflectanceSpectrum", ColorSpecification=sid,
+                               StartWL=f"{s.wavelength_nm[0]:g}")
+            rs.text = " ".join(_fmt(v) for v in r)
+    ET.indent(root)
+    atomic_write_bytes(path, ET.tostring(root, encoding="utf-8", xml_declaration=True))
+    return Path(path)
+
+
+# ---------------------------------------------------------------------------------------- CSV
+
+
+def read_spectra_csv(path, unit: str = "auto", geometry: str | None = None) -> MeasuredSpectra:
+    """``wavelength_nm,<name>,<name>…`` with a header line; one column per sample."""
+    import csv
+
+    p = Path(path)
+    with p.open(encoding="utf-8-sig", newline="") as fh:
+        rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
+    if len(rows) < 3:
+        raise DataFileError(f"{p.name}: a header and at least two wavelengths are needed, got {len(rows)} lines")
+    head = [h.strip() for h in rows[0]]
+    if head[0].lower() not in ("wavelength_nm", "wavelength", "nm"):
+        raise DataFileError(f"{p.name}: the first column must be 'wavelength_nm' (got {head[0]!r}); then one column per sample")
+    if len(head) < 2:
+        raise DataFileError(f"{p.name}: no sample columns after wavelength_nm")
+    data = []
+    for no, r in enumerate(rows[1:], 2):
+        if len(r) != len(head):
+            raise DataFileError(f"{p.name}: line {no}: {len(r)} values for {len(head)} columns (truncated row?)")
+        try:
+            data.append([float(x) for x in r])
+        except ValueError:
+            raise DataFileError(f"{p.name}: line {no}: a value is not a number") from None
+    a = np.array(data)
+    if np.any(np.diff(a[:, 0]) <= 0):
+        raise DataFileError(f"{p.name}: wavelengths must increase down the file")
+    names = tuple(h if h.lower() != "reflectance" else p.stem for h in head[1:])
+    return MeasuredSpectra(a[:, 0], _scaled(a[:, 1:].T, unit, p.name), names, geometry, {})
+
+
+def read_measured(path, unit: str = "auto", geometry: str | None = None) -> MeasuredSpectra:
+    """A measured file by its suffix: ``.cxf`` / ``.xml`` (CxF3), ``.txt`` / ``.cgats`` / ``.cgt`` /
+    ``.it8`` (CGATS.17), ``.csv``."""
+    p = Path(path)
+    if not p.exists():
+        raise DataFileError(f"measured file {str(p)!r} not found")
+    suf = p.suffix.lower()
+    if suf in (".cxf", ".xml"):
+        return read_cxf(p, geometry, unit)
+    if suf in (".txt", ".cgats", ".cgt", ".it8", ".ti3"):
+        s = read_cgats(p, unit)
+        if geometry is not None and s.geometry not in (None, geometry):
+            raise DataFileError(f"{p.name}: measured at {s.geometry!r}, not {geometry!r}")
+        return s
+    if suf == ".csv":
+        return read_spectra_csv(p, unit, geometry)
+    raise DataFileError(f"{p.name}: unknown measured-file type {suf!r}; give .cxf (CxF3), .txt/.cgats (CGATS.17) or .csv")

@@ -1,0 +1,426 @@
+"""Colour matching: the values of a recipe's free keys (pigment fractions, film thickness,
+particle size …) that reproduce a target spectrum or CIELAB colour, through nmmm's own forward
+model (Mie optics of the compounds, then adding–doubling through the coat stack).
+
+- :func:`parse_bound` — ``"pigments.0.fraction=0:0.2"`` -> :class:`Bound` (the key paths of
+  ``nmmm sweep``, checked to exist, be numeric and have LO < HI).
+- :class:`RecipeModel` — a recipe whose keys are free: ``reflectance(values, solver)``; counts
+  its evaluations. Pigment fractions below the CPVC take the *linear* path: each component's
+  Mie optics are computed once per unit fraction, and a film's μ_a, μ_s and phase moments are
+  their fraction-weighted sums (independent scattering, exactly what
+  :func:`nmmm.layers.pigment_mixture.mixture_optics` computes); other keys rebuild the recipe.
+- :func:`match_recipe` — the match (:class:`MatchResult`).
+
+Method. The free values are mapped to [0, 1] on their bounds and fitted with scipy's bounded
+trust-region least squares (``least_squares(method="trf")``). Stage 1 runs on the Kubelka–Munk
+path of the same optics (Gate's K, S + Saunderson: ~3× cheaper) from the box centre and from the
+recipe's own values; stage 2 restarts the best candidates on adding–doubling (the quadrature
+pinned at the count the automatic rule picks at the stage-1 optimum, so finite differences see
+a smooth model; the final spectrum is re-evaluated with the automatic rule). A stage stops when
+the residual norm falls below ``stop_norm`` (1e-4: ΔE00 or % RMS). Residuals:
+
+- ``mode="colorimetric"``: the CIEDE2000 residual vector under the primary illuminant
+  (:func:`~nmmm.matching.metamerism.delta_e2000_residuals`, norm = ΔE00), plus, with a target
+  spectrum and ``metamerism_weight`` w > 0, √w × the residual vector of the metamerism index
+  under each test illuminant, plus ``spectral_weight`` (default 0.1) × the spectral residual in
+  percent — with a target spectrum, this picks the isomeric member of a family of metamers that
+  all reach ΔE00 = 0 (two fractions in an opaque film are one hue ratio for the eye);
+- ``mode="spectral"``: (R − R_target) in percent / √W (its norm is the spectral RMS in %).
+
+Reported: ΔE00, ΔL*, ΔC*, ΔH* under the primary illuminant, the CIE special metamerism index
+(:func:`~nmmm.matching.metamerism.metamerism_index`, ΔE00, additive correction) under each test
+illuminant, spectral RMS, the model evaluations of each stage, the fractions' standard errors
+for a stated reflectance noise (Gauss–Newton covariance of the spectral residual: a large value
+says the key is not identifiable from the spectrum), and which bounds are active. A best match
+above ``tolerance_de00`` warns, naming the ΔL*/ΔC*/ΔH* still missing and the bounds that stop it.
+
+References
+----------
+- P. Virtanen et al., SciPy 1.0, Nat. Methods 17, 261 (2020) — ``scipy.optimize.least_squares``.
+- R. McDonald, "Recipe prediction for textiles", in *Colour Physics for Industry*, 2nd ed.,
+  SDC (1997), ch. 6 — the matching problem and its metamerism constraint.
+- CIE 15:2004 §9.2; G. Sharma et al., Color Res. Appl. 30, 21 (2005).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from nmmm.errors import InvalidInputError, RecipeError
+
+__all__ = ["Bound", "parse_bound", "RecipeModel", "MatchResult", "match_recipe", "MATCH_MODES"]
+
+MATCH_MODES = ("colorimetric", "spectral")
+_FRACTION_KEY = re.compile(r"^(?:coats\.(\d+)\.)?pigments\.(\d+)\.fraction$")
+
+
+@dataclass(frozen=True)
+class Bound:
+    key: str
+    lo: float
+    hi: float
+
+
+def parse_bound(spec) -> Bound:
+    """``KEY=LO:HI`` (or a ``(key, lo, hi)`` tuple) -> :class:`Bound` (LO < HI, finite)."""
+    if isinstance(spec, Bound):
+        return spec
+    if isinstance(spec, (tuple, list)) and len(spec) == 3:
+        key, lo, hi = spec
+    else:
+        s = str(spec)
+        if "=" not in s or ":" not in s.split("=", 1)[1]:
+            raise RecipeError(f"--vary {s!r}: write KEY=LO:HI (e.g. pigments.0.fraction=0:0.2)")
+        key, rng = (t.strip() for t in s.split("=", 1))
+        parts = rng.split(":")
+        if len(parts) != 2:
+            raise RecipeError(f"--vary {s!r}: a match range is LO:HI (two numbers)")
+        try:
+            lo, hi = float(parts[0]), float(parts[1])
+        except ValueError:
+            raise RecipeError(f"--vary {s!r}: LO and HI must be numbers") from None
+    lo, hi = float(lo), float(hi)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise RecipeError(f"--vary {key}: LO and HI must be finite")
+    if not lo < hi:
+        raise RecipeError(f"--vary {key}={lo:g}:{hi:g}: LO must be below HI")
+    if key.endswith("fraction") and (lo < 0 or hi > 1):
+        raise RecipeError(f"--vary {key}={lo:g}:{hi:g}: a fraction lies in [0, 1]")
+    return Bound(str(key), lo, hi)
+
+
+def _stack_index(recipe, m):
+    """Index in the stack's coats of the coat holding ``m``'s pigment (film: after the clear coat)."""
+    if m.group(1) is not None:
+        return int(m.group(1))
+    return 1 if (recipe.film is not None and recipe.film.clear_coat_nm > 0) else 0
+
+
+class RecipeModel:
+    """The forward model of a recipe with free keys (module docstring)."""
+
+    def __init__(self, recipe, bounds, solver: str = "ad"):
+        from nmmm.recipes.paint_stack import _solver, geometry_of, recipe_stack
+        from nmmm.recipes.run import _grid, build_materials
+        from nmmm.recipes.schema import get_key, parse_recipe, read_toml
+
+        raw, _, base = read_toml(recipe)
+        self.raw, self.base_dir = raw, base
+        self.bounds = tuple(parse_bound(b) for b in bounds)
+        if not self.bounds:
+            raise RecipeError("--vary: give at least one KEY=LO:HI to match")
+        keys = [b.key for b in self.bounds]
+        if len(set(keys)) != len(keys):
+            raise RecipeError(f"--vary: a key is given twice: {keys}")
+        for b in self.bounds:
+            v = get_key(raw, b.key)
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise RecipeError(f"{b.key}: is {v!r}, not a number; only numeric keys can be matched")
+        self.recipe = parse_recipe(raw, base_dir=base)
+        if self.recipe.film is None and self.recipe.coats is None:
+            raise RecipeError("matching needs a paint recipe ([[pigments]] + [film], or [[coats]]); "
+                              f"this one is a {self.recipe.macro!r} recipe")
+        self.wavelength_nm = _grid(self.recipe)
+        self.mats = build_materials(self.recipe, self.wavelength_nm, progress=False)
+        self.geometry = geometry_of(self.recipe)
+        self.solver = solver if solver else _solver(self.recipe)
+        self.stack = recipe_stack(self.recipe, self.mats, self.wavelength_nm)
+        self.initial = np.array([float(get_key(raw, k)) for k in keys])
+        self.evaluations = {"km": 0, "ad": 0}
+        self._recipe_stack = recipe_stack
+        self._linear = self._linear_path()
+
+    # -- the linear path (fractions below the CPVC, independent scattering)
+    def _linear_path(self):
+        from nmmm.layers.coat_stack import Coat, coat_optics
+        from nmmm.layers.pigment_mixture import DEFAULT_CPVC
+
+        hits = [_FRACTION_KEY.match(b.key) for b in self.bounds]
+        if not all(hits):
+            return None
+        w = self.wavelength_nm
+        coats = self.stack.coats
+        per = {}
+        for j, (b, m) in enumerate(zip(self.bounds, hits)):
+            ci, pi = _stack_index(self.recipe, m), int(m.group(2))
+            if ci >= len(coats) or pi >= len(coats[ci].components):
+                return None
+            per.setdefault(ci, []).append((pi, j))
+        unit = {}
+        for ci, items in per.items():
+            c = coats[ci]
+            cpvc = DEFAULT_CPVC if c.cpvc is None else c.cpvc
+            fixed = sum(x.fraction for i, x in enumerate(c.components) if i not in [p for p, _ in items])
+            top = fixed + sum(self.bounds[j].hi for _, j in items)
+            if c.dependent_scattering or top >= cpvc:
+                return None  # structure factor or voids: not linear in the fractions
+            parts = []
+            for i, comp in enumerate(c.components):
+                f_ref = comp.fraction if comp.fraction > 0 else 0.01
+                one = type(comp)(comp.compound, comp.distribution, f_ref, comp.name)
+                o = coat_optics(Coat(c.name, c.thickness_nm, c.binder, (one,)), w)
+                mu_s = o.mu_s_per_nm
+                mom = o.phase_moments * mu_s[:, None]
+                parts.append(((o.mu_a_per_nm - (1 - f_ref) * o.binder_absorption_per_nm) / f_ref, mom / f_ref))
+            unit[ci] = (parts, dict(items), o.n_binder, o.binder_absorption_per_nm)
+        self._fixed_optics = tuple(coat_optics(c, w) if i not in unit else None for i, c in enumerate(coats))
+        return unit
+
+    def values(self, x) -> dict:
+        return {b.key: float(v) for b, v in zip(self.bounds, np.atleast_1d(x))}
+
+    def matched_raw(self, x) -> dict:
+        from nmmm.recipes.schema import set_key
+
+        raw = self.raw
+        for k, v in self.values(x).items():
+            raw = set_key(raw, k, float(f"{v:.6g}"))
+        return raw
+
+    def optics(self, x):
+        """The coats' MixtureOptics and the stack at the free values ``x`` (physical units)."""
+        from nmmm.layers.coat_stack import coat_optics
+        from nmmm.layers.pigment_mixture import MixtureOptics
+        from nmmm.recipes.schema import parse_recipe
+
+        x = np.atleast_1d(np.asarray(x, float))
+        if self._linear is None:
+            rec = parse_recipe(self.matched_raw_exact(x), base_dir=self.base_dir)
+            if any(b.key.startswith(("compounds", "levels")) for b in self.bounds):
+                from nmmm.recipes.run import build_materials
+
+                mats = build_materials(rec, self.wavelength_nm, progress=False)
+            else:
+                mats = self.mats
+            stack = self._recipe_stack(rec, mats, self.wavelength_nm)
+            return tuple(coat_optics(c, self.wavelength_nm) for c in stack.coats), stack
+        w = self.wavelength_nm
+        opts = list(self._fixed_optics)
+        for ci, (parts, where, n_b, alpha_b) in self._linear.items():
+            comps = self.stack.coats[ci].components
+            f = np.array([x[where[i]] if i in where else comps[i].fraction for i in range(len(comps))])
+            pvc = float(f.sum())
+            mu_a = (1 - pvc) * alpha_b + sum(fi * a for fi, (a, _) in zip(f, parts))
+            mom = sum(fi * m for fi, (_, m) in zip(f, parts))
+            mu_s = np.maximum(mom[:, 0], 0.0)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                chi = np.where(mu_s[:, None] > 0, mom / np.where(mu_s > 0, mu_s, 1.0)[:, None], np.eye(1, mom.shape[1]))
+            chi = np.clip(chi, -1, 1)
+            chi[:, 0] = 1.0
+            opts[ci] = MixtureOptics(w, np.maximum(mu_a, 0.0), mu_s, chi, n_b, alpha_b, pvc, 0.0)
+        return tuple(opts), self.stack
+
+    def matched_raw_exact(self, x) -> dict:
+        from nmmm.recipes.schema import set_key
+
+        raw = self.raw
+        for k, v in self.values(x).items():
+            raw = set_key(raw, k, v)
+        return raw
+
+    def quad_pts_at(self, x) -> int:
+        """The node count the automatic adding–doubling rule picks at ``x``."""
+        from nmmm.layers.adding_doubling_method import auto_quad_pts
+
+        opts, _ = self.optics(x)
+        chis = [o.phase_moments for o in opts]
+
+        def chi_of(m):
+            return (np.concatenate([c[:, 1] for c in chis]),
+                    np.concatenate([c[:, m] if m < c.shape[1] else np.zeros(c.shape[0]) for c in chis]))
+
+        return auto_quad_pts(chi_of)
+
+    def reflectance(self, x, solver: str | None = None, quad_pts: int | None = None) -> np.ndarray:
+        """The recipe's reflectance (its geometry) at the free values ``x`` (physical units)."""
+        from nmmm.layers.coat_stack import stack_reflectance
+
+        s = solver or self.solver
+        opts, stack = self.optics(x)
+        self.evaluations[s] = self.evaluations.get(s, 0) + 1
+        return stack_reflectance(stack, self.wavelength_nm, s, self.geometry, quad_pts=quad_pts if s == "ad" else None,
+                                 optics=opts).reflectance
+
+
+@dataclass
+class MatchResult:
+    values: dict
+    reflectance: np.ndarray
+    wavelength_nm: np.ndarray
+    target_lab: np.ndarray
+    lab: np.ndarray
+    de00: float
+    dlch: np.ndarray
+    metamerism: dict  # test illuminant -> index (ΔE00); empty without a target spectrum
+    spectral_rms: float  # reflectance units; nan without a target spectrum
+    illuminant: str
+    mode: str
+    evaluations: dict
+    time_s: float
+    candidates: list = field(default_factory=list)  # dicts, ranked by dE00
+    standard_errors: dict = field(default_factory=dict)  # key -> σ at the stated noise
+    active_bounds: list = field(default_factory=list)
+    recipe_raw: dict = field(default_factory=dict)
+    target_reflectance: np.ndarray | None = None
+    warnings: list = field(default_factory=list)
+    quad_pts: int = 0
+
+
+def _check_target(target, w):
+    R = np.asarray(target, float)
+    if R.shape != w.shape:
+        raise InvalidInputError(f"target spectrum has {R.size} values; the recipe's grid has {w.size} "
+                                "(interpolate it with MeasuredSpectra.on_grid)")
+    if not np.all(np.isfinite(R)):
+        raise InvalidInputError("target spectrum has non-finite values")
+    if R.max() > 1.5:
+        raise InvalidInputError(f"target reflectance reaches {R.max():g}: percent, not factors (0-1); divide by 100")
+    if R.min() < 0 or R.max() > 1.0 + 1e-9:
+        raise InvalidInputError(f"target reflectance spans {R.min():g}–{R.max():g}; a reflectance factor of a paint lies in [0, 1]")
+    return R
+
+
+def _missing_words(dlch):
+    dL, dC, dH = dlch
+    bits = []
+    if abs(dL) > 0.3:
+        bits.append(f"{'too light' if dL > 0 else 'too dark'} by ΔL* {dL:+.2f}")
+    if abs(dC) > 0.3:
+        bits.append(f"{'too chromatic' if dC > 0 else 'too dull'} by ΔC* {dC:+.2f}")
+    if abs(dH) > 0.3:
+        bits.append(f"hue off by ΔH* {dH:+.2f}")
+    return ", ".join(bits) or "small in every direction"
+
+
+def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, mode: str = "colorimetric",
+                 illuminant: str = "D65", test_illuminants=("A", "F11"), observer: str = "2",
+                 metamerism_weight: float = 0.0, spectral_weight: float = 0.1, tolerance_de00: float = 1.0,
+                 noise: float = 0.002, km_start: bool = True, n_refine: int = 2, stop_norm: float = 1e-4,
+                 progress: bool = False) -> MatchResult:
+    """Match ``model``'s free keys to a target spectrum (on the model's grid) or CIELAB (module docstring)."""
+    from scipy.optimize import least_squares
+    from tqdm import tqdm
+
+    from nmmm.colour import delta_e2000, spectra_to_lab
+    from nmmm.colour.illuminants import canonical_illuminant
+    from nmmm.matching.metamerism import delta_e2000_residuals, delta_lch, metamerism_index
+
+    if mode not in MATCH_MODES:
+        raise InvalidInputError(f"mode must be one of {MATCH_MODES}, got {mode!r}")
+    w = model.wavelength_nm
+    Rt = None if target_reflectance is None else _check_target(target_reflectance, w)
+    if Rt is None and target_lab is None:
+        raise InvalidInputError("give a target spectrum or a target CIELAB")
+    if Rt is None and mode == "spectral":
+        raise InvalidInputError("a spectral match needs a target spectrum (a CIELAB target allows mode='colorimetric' only)")
+    lab_t = spectra_to_lab(w, Rt, illuminant, observer) if Rt is not None else np.asarray(target_lab, float)
+    if lab_t.shape != (3,) or not np.all(np.isfinite(lab_t)) or lab_t[0] < 0 or lab_t[0] > 100:
+        raise InvalidInputError(f"target CIELAB must be (L*, a*, b*) with 0 <= L* <= 100, got {target_lab!r}")
+    tests = tuple(test_illuminants) if Rt is not None else ()
+    lab_t_test = {t: spectra_to_lab(w, Rt, t, observer) for t in tests}
+    lo = np.array([b.lo for b in model.bounds])
+    span = np.array([b.hi - b.lo for b in model.bounds])
+    t0 = time.perf_counter()
+
+    def phys(u):
+        return lo + np.clip(u, 0, 1) * span
+
+    def residuals(u, solver, quad):
+        R = model.reflectance(phys(u), solver, quad)
+        if mode == "spectral":
+            return (R - Rt) * 100 / np.sqrt(w.size)
+        lab = spectra_to_lab(w, np.clip(R, 0, None), illuminant, observer)
+        parts = [delta_e2000_residuals(lab_t, lab)]
+        if metamerism_weight > 0:
+            for t in tests:
+                corr = spectra_to_lab(w, np.clip(R, 0, None), t, observer) - (lab - lab_t)
+                parts.append(np.sqrt(metamerism_weight) * delta_e2000_residuals(lab_t_test[t], corr))
+        if spectral_weight > 0 and Rt is not None:
+            parts.append(spectral_weight * (R - Rt) * 100 / np.sqrt(w.size))
+        return np.concatenate(parts)
+
+    class _Done(Exception):
+        pass
+
+    def stopping(u, solver, quad):
+        r = residuals(u, solver, quad)
+        if float(np.linalg.norm(r)) < stop_norm:  # matched to well below a visible difference: stop
+            raise _Done(np.array(u, float), r)
+        return r
+
+    def fit(u0, solver, quad):
+        try:
+            r = least_squares(stopping, u0, args=(solver, quad), bounds=(0.0, 1.0), method="trf", x_scale=1.0,
+                              diff_step=1e-4, xtol=1e-9, ftol=1e-9, gtol=1e-9, max_nfev=100)
+            return r.x, r.fun
+        except _Done as done:
+            return done.args[0], done.args[1]
+
+    starts = [np.full(lo.size, 0.5), np.clip((model.initial - lo) / span, 0, 1)]
+    bar = tqdm(total=2, desc="match", disable=not progress, leave=False, unit="stage")
+    stage1 = []
+    for u0 in starts:
+        if km_start:
+            u, fun = fit(u0, "km", None)
+            stage1.append((float(np.sum(fun**2)), u))
+        else:
+            stage1.append((0.0, u0))
+    bar.update(1)
+    stage1.sort(key=lambda t: t[0])
+    quad = model.quad_pts_at(phys(stage1[0][1]))
+    cands = []
+    for _, u0 in stage1[:max(1, n_refine)]:
+        u, fun = fit(u0, "ad", quad)
+        R = model.reflectance(phys(u), "ad", None)  # the automatic quadrature, as `nmmm run` computes it
+        lab = spectra_to_lab(w, np.clip(R, 0, None), illuminant, observer)
+        cands.append(dict(u=u, R=R, lab=lab, de00=float(delta_e2000(lab_t, lab)), cost=float(np.sum(fun**2))))
+    bar.update(1)
+    bar.close()
+    cands.sort(key=lambda c: c["de00"])
+    unique = []  # starts that converged to the same values are one candidate
+    for c in cands:
+        if not any(np.max(np.abs(c["u"] - d["u"])) < 1e-4 for d in unique):
+            unique.append(c)
+    cands = unique
+    best = cands[0]
+    x = phys(best["u"])
+    dlch = delta_lch(lab_t, best["lab"])
+    mi = {canonical_illuminant(t): float(metamerism_index(w, Rt, best["R"], t, illuminant, observer)) for t in tests}
+    rms = float(np.sqrt(np.mean((best["R"] - Rt) ** 2))) if Rt is not None else float("nan")
+    active = [b.key + ("=LO" if u < 1e-6 else "=HI") for b, u in zip(model.bounds, best["u"]) if u < 1e-6 or u > 1 - 1e-6]
+    se = {}
+    if Rt is not None:  # Gauss-Newton covariance of the spectral residual at the optimum, noise σ per wavelength
+        J = np.empty((w.size, lo.size))
+        h = 1e-4
+        for j in range(lo.size):
+            e = np.zeros(lo.size)
+            e[j] = h * span[j]
+            J[:, j] = (model.reflectance(x + e, "ad", quad) - model.reflectance(x - e, "ad", quad)) / (2 * h * span[j])
+        try:
+            cov = noise**2 * np.linalg.inv(J.T @ J)
+            se = {b.key: float(np.sqrt(max(cov[j, j], 0.0))) for j, b in enumerate(model.bounds)}
+        except np.linalg.LinAlgError:
+            se = {b.key: float("inf") for b in model.bounds}
+    msgs = []
+    if best["de00"] > tolerance_de00:
+        msg = (f"the best match is ΔE00 = {best['de00']:.2f} (> {tolerance_de00:g}) from the target: the colourants "
+               f"cannot reach it — {_missing_words(dlch)}" + (f"; stopped by the bounds {active}" if active else "")
+               + " (add a colourant that supplies the missing direction, or widen the bounds)")
+        warnings.warn(msg, stacklevel=2)
+        msgs.append(msg)
+    rows = []
+    for c in cands:
+        rows.append(dict(**model.values(phys(c["u"])), dE00=c["de00"],
+                         **{f"metamerism_index_{canonical_illuminant(t)}": float(metamerism_index(w, Rt, c["R"], t, illuminant,
+                                                                                                  observer)) for t in tests},
+                         illuminant=canonical_illuminant(illuminant), **dict(zip(("dL", "dC", "dH"),
+                                                                                 (float(v) for v in delta_lch(lab_t, c["lab"]))))))
+    return MatchResult(model.values(x), best["R"], w, lab_t, best["lab"], best["de00"], dlch, mi, rms,
+                       canonical_illuminant(illuminant), mode, dict(model.evaluations), time.perf_counter() - t0, rows, se,
+                       active, model.matched_raw(x), Rt, msgs, quad)

@@ -1,0 +1,45 @@
+"""``nmmm match TARGET RECIPE --vary ...`` writes a complete result folder (issue 17 item 3)."""
+
+import csv
+
+import numpy as np
+
+from nmmm.cli import main
+from nmmm.matching import RecipeModel, read_cgats
+from nmmm.recipes.schema import example_path, read_toml, parse_recipe
+
+
+def test_match_cli_writes_the_folder(tmp_path, capsys):
+    recipe = example_path("hematite_tint")
+    m = RecipeModel(recipe, ["pigments.0.fraction=0.005:0.08"])
+    R = m.reflectance([0.021])
+    target = tmp_path / "batch.csv"
+    target.write_text("wavelength_nm,batch 7\n" + "\n".join(f"{w:g},{r:.6f}" for w, r in zip(m.wavelength_nm, R)) + "\n")
+    out = tmp_path / "res"
+    rc = main(["match", str(target), str(recipe), "--vary", "pigments.0.fraction=0.005:0.08", "-t", "A", "-t", "TL84",
+               "-o", str(out), "--no-progress"])
+    assert rc == 0
+    said = capsys.readouterr().out
+    assert "pigments.0.fraction = 0.021" in said and "dE00 = 0.0000" in said
+    for name in ("matched_recipe.toml", "matches.csv", "spectra.csv", "spectra.png", "report.md", "prediction.cgats",
+                 "match.json"):
+        assert (out / name).is_file(), name
+    rows = list(csv.DictReader((out / "matches.csv").open()))
+    assert rows[0]["rank"] == "1" and float(rows[0]["dE00"]) < 0.01
+    assert {"pigments.0.fraction", "metamerism_index_A", "metamerism_index_FL11", "illuminant", "dL", "dC", "dH"} <= set(rows[0])
+    raw, _, _ = read_toml(out / "matched_recipe.toml")
+    assert parse_recipe(raw, base_dir=recipe.parent).pigments[0].fraction == 0.021
+    np.testing.assert_allclose(read_cgats(out / "prediction.cgats").reflectance[0], R, atol=1e-5)
+    assert not list(tmp_path.glob(".res.incomplete-*"))
+
+
+def test_match_cli_bad_input_is_one_line(tmp_path, capsys):
+    target = tmp_path / "pc.csv"
+    target.write_text("wavelength_nm,reflectance\n400,10\n500,20\n600,30\n")
+    rc = main(["match", str(target), str(example_path("hematite_tint")), "--vary", "pigments.0.fraction=0:0.1",
+               "-o", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.startswith("error: ") and "percent" in err and err.count("\n") == 1
+    rc = main(["match", "lab:50,10", str(example_path("hematite_tint")), "--vary", "pigments.0.fraction=0:0.1"])
+    assert rc == 2 and "lab:L,a,b" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

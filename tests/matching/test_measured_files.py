@@ -1,0 +1,142 @@
+"""Measured spectra in and out: CGATS.17, CxF3, CSV (issue 17 item 1). Files are written here, by hand."""
+
+import numpy as np
+import pytest
+
+from nmmm.errors import DataFileError
+from nmmm.matching import (MeasuredSpectra, cxf_geometries, read_cgats, read_cxf, read_measured, read_spectra_csv,
+                           write_cgats, write_cxf)
+
+CGATS = """CGATS.17
+ORIGINATOR "Test instrument"
+MEASUREMENT_GEOMETRY "d:8"
+NUMBER_OF_FIELDS 5
+BEGIN_DATA_FORMAT
+SAMPLE_ID SAMPLE_NAME SPECTRAL_NM400 SPECTRAL_NM410 SPECTRAL_NM420
+END_DATA_FORMAT
+NUMBER_OF_SETS 2
+BEGIN_DATA
+1 "red panel" 0.0512 0.0498 0.0501
+2 "white tile" 0.8810 0.8902 0.8955
+END_DATA
+"""
+
+
+def _write(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+def test_cgats_reads_hand_checked_values(tmp_path):
+    s = read_cgats(_write(tmp_path, "a.txt", CGATS))
+    np.testing.assert_array_equal(s.wavelength_nm, [400, 410, 420])
+    assert s.names == ("red panel", "white tile")
+    assert s.geometry == "d:8"
+    assert s.reflectance[1, 2] == pytest.approx(0.8955)
+    assert s.metadata["ORIGINATOR"] == "Test instrument"
+
+
+def test_cgats_round_trip(tmp_path):
+    w = np.arange(400.0, 701.0, 10.0)
+    R = np.stack([0.1 + 0.6 * np.exp(-((w - c) / 50) ** 2) for c in (450, 550, 650)])
+    s = MeasuredSpectra(w, R, ("blue", "green", "red"), "45:0")
+    back = read_cgats(write_cgats(tmp_path / "out.cgats", s))
+    np.testing.assert_allclose(back.reflectance, R, atol=5e-7)
+    np.testing.assert_array_equal(back.wavelength_nm, w)
+    assert back.names == s.names and back.geometry == "45:0"
+
+
+def test_cgats_truncated(tmp_path):
+    p = _write(tmp_path, "t.txt", CGATS.split("2 \"white")[0])
+    with pytest.raises(DataFileError, match="truncated"):
+        read_cgats(p)
+    q = _write(tmp_path, "n.txt", CGATS.replace("NUMBER_OF_SETS 2", "NUMBER_OF_SETS 3"))
+    with pytest.raises(DataFileError, match="NUMBER_OF_SETS says 3"):
+        read_cgats(q)
+    r = _write(tmp_path, "r.txt", CGATS.replace(" 0.0501\n", "\n"))
+    with pytest.raises(DataFileError, match="4 values for 5 fields"):
+        read_cgats(r)
+
+
+def test_cgats_without_spectral_fields(tmp_path):
+    text = CGATS.replace("SPECTRAL_NM400 SPECTRAL_NM410 SPECTRAL_NM420", "LAB_L LAB_A LAB_B")
+    with pytest.raises(DataFileError, match="no spectral fields"):
+        read_cgats(_write(tmp_path, "lab.txt", text))
+
+
+def test_percent_is_detected_and_declared(tmp_path):
+    text = CGATS.replace("0.0512 0.0498 0.0501", "5.12 4.98 5.01").replace("0.8810 0.8902 0.8955", "88.10 89.02 89.55")
+    p = _write(tmp_path, "pc.txt", text)
+    with pytest.raises(DataFileError, match="percent"):
+        read_cgats(p)
+    assert read_cgats(p, unit="percent").reflectance[1, 2] == pytest.approx(0.8955)
+    q = _write(tmp_path, "norm.txt", text.replace("NUMBER_OF_FIELDS", "SPECTRAL_NORM 100\nNUMBER_OF_FIELDS"))
+    assert read_cgats(q).reflectance[0, 0] == pytest.approx(0.0512)
+
+
+def test_cxf_multi_angle_round_trip_and_geometry_choice(tmp_path):
+    w = np.arange(400.0, 701.0, 20.0)
+    sets = [MeasuredSpectra(w, np.stack([np.full(w.size, 0.1 * (k + 1)), np.linspace(0.2, 0.5, w.size) / (k + 1)]),
+                            ("flop", "face"), g) for k, g in enumerate(["45:-15", "45:15", "45:45"])]
+    p = write_cxf(tmp_path / "ma.cxf", sets)
+    assert cxf_geometries(p) == ["45:-15", "45:15", "45:45"]
+    with pytest.raises(DataFileError, match="3 geometries"):
+        read_cxf(p)  # mixed geometries: one has to be chosen
+    s = read_cxf(p, geometry="45:15")
+    np.testing.assert_array_equal(s.wavelength_nm, w)
+    np.testing.assert_allclose(s.reflectance, sets[1].reflectance, atol=5e-7)
+    assert s.names == ("flop", "face")
+    with pytest.raises(DataFileError, match="no spectra at geometry"):
+        read_cxf(p, geometry="45:110")
+
+
+CXF_SPEC_EXAMPLE = """<?xml version="1.0" encoding="UTF-8"?>
+<cc:CxF xmlns:cc="http://colorexchangeformat.com/CxF3-core">
+  <cc:Resources>
+    <cc:ObjectCollection>
+      <cc:Object ObjectType="Target" Name="Sample" Id="1">
+        <cc:ColorValues>
+          <cc:ReflectanceSpectrum ColorSpecification="CS1" StartWL="400">0.1 0.2 0.3 0.4</cc:ReflectanceSpectrum>
+        </cc:ColorValues>
+      </cc:Object>
+    </cc:ObjectCollection>
+    <cc:ColorSpecificationCollection>
+      <cc:ColorSpecification Id="CS1">
+        <cc:MeasurementSpec>
+          <cc:MeasurementType>Spectrum_Reflectance</cc:MeasurementType>
+          <cc:WavelengthRange StartWL="400" Increment="10"/>
+        </cc:MeasurementSpec>
+      </cc:ColorSpecification>
+    </cc:ColorSpecificationCollection>
+  </cc:Resources>
+</cc:CxF>
+"""
+
+
+def test_cxf_in_the_specifications_layout(tmp_path):
+    s = read_cxf(_write(tmp_path, "spec.cxf", CXF_SPEC_EXAMPLE))
+    np.testing.assert_array_equal(s.wavelength_nm, [400, 410, 420, 430])
+    np.testing.assert_allclose(s.reflectance[0], [0.1, 0.2, 0.3, 0.4])
+
+
+def test_cxf_truncated_and_empty(tmp_path):
+    with pytest.raises(DataFileError, match="truncated"):
+        read_cxf(_write(tmp_path, "t.cxf", CXF_SPEC_EXAMPLE[:400]))
+    no_spec = CXF_SPEC_EXAMPLE.replace("ReflectanceSpectrum", "ColorCIELab")
+    with pytest.raises(DataFileError, match="no ReflectanceSpectrum"):
+        read_cxf(_write(tmp_path, "e.cxf", no_spec))
+
+
+def test_csv_several_samples(tmp_path):
+    p = _write(tmp_path, "s.csv", "wavelength_nm,batch 1,batch 2\n400,0.10,0.11\n500,0.20,0.21\n600,0.30,0.31\n")
+    s = read_spectra_csv(p)
+    assert s.names == ("batch 1", "batch 2")
+    np.testing.assert_allclose(s.spectrum("batch 2"), [0.11, 0.21, 0.31])
+    np.testing.assert_allclose(s.on_grid([450.0, 550.0])[0], [0.15, 0.25])
+    with pytest.raises(DataFileError, match="percent"):
+        read_spectra_csv(_write(tmp_path, "p.csv", "wavelength_nm,reflectance\n400,10\n500,20\n600,30\n"))
+    with pytest.raises(DataFileError, match="truncated row"):
+        read_spectra_csv(_write(tmp_path, "t.csv", "wavelength_nm,a,b\n400,0.1,0.1\n500,0.2\n600,0.3,0.3\n"))
+    assert read_measured(p).names == s.names
+    assert read_measured(_write(tmp_path, "c.cgats", CGATS)).names == ("red panel", "white tile")
