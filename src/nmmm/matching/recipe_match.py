@@ -373,6 +373,11 @@ def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, m
             stage1.append((0.0, u0))
     bar.update(1)
     stage1.sort(key=lambda t: t[0])
+    distinct = []  # starts that reached the same KM optimum are refined once
+    for c, u in stage1:
+        if not any(np.max(np.abs(u - v)) < 1e-3 for _, v in distinct):
+            distinct.append((c, u))
+    stage1 = distinct
     quad = model.quad_pts_at(phys(stage1[0][1]))
     cands = []
     for _, u0 in stage1[:max(1, n_refine)]:
