@@ -27,6 +27,7 @@ HOOKS = (
     ("Hematite paint in depth (nmmm.layers)", "nmmm.demo.hematite:hematite_demo"),
     ("Interference pigments in depth (nmmm.layers)", "nmmm.demo.interference:demo"),
     ("Real paint systems: tints, whites, coats (nmmm.layers)", "nmmm.demo.paint_systems:demo"),
+    ("Colour matching: a hidden mixture matched back to a recipe (nmmm.matching)", "nmmm.demo.matching:demo"),
     ("Physical fidelity: hematite colour sensitivity, gold size series", "nmmm.demo.sensitivity:demo"),
     ("Microstructures (nmmm.microstructure)", "nmmm.demo.microstructure:demo"),
     ("FFT homogenization (nmmm.homogenize)", "nmmm.demo.homogenization:demo"),
