@@ -5,7 +5,10 @@
   absorber; see :mod:`nmmm.ellipsometry.forward`).
 - :func:`pseudo_dielectric` — direct inversion of a bulk sample, ⟨ε⟩.
 - :class:`EllipsometryData`, :func:`read_data`, :func:`read_csv`, :func:`read_woollam`,
-  :func:`write_csv`, :func:`write_material_csv` — data files.
+  :func:`write_csv`, :func:`write_material_csv` — data files; :class:`DataScan` — what the readers
+  found wrong in a file (NaN rows, truncated lines, repeated or unsorted points; ``strict=True`` refuses).
+- :func:`thickness_prescan`, :func:`check_fit_quality` — a global scan of each varied thickness
+  before the local fit (the interference order), and the warning when the reduced MSE is far above 1.
 - :class:`Parameter`, :class:`FitResult`, :func:`fit_psi_delta` — weighted least squares with
   uncertainties and correlations; :class:`FitAtBoundWarning` when a parameter ends on a bound.
 - :func:`fit_joint` — one fit over several data sets (films of one resin with different
@@ -29,7 +32,8 @@ _EXPORTS = {
     "rho_from_psi_delta": "forward", "bulk_rho": "forward", "uniaxial_bulk_rho": "forward",
     "pseudo_dielectric": "pseudo_dielectric_function", "pseudo_dielectric_material": "pseudo_dielectric_function",
     "EllipsometryData": "data", "read_data": "data", "read_csv": "data", "read_woollam": "data",
-    "write_csv": "data", "write_material_csv": "data",
+    "write_csv": "data", "write_material_csv": "data", "DataScan": "data",
+    "thickness_prescan": "fit_start", "check_fit_quality": "fit_start",
     "Parameter": "fitting", "FitResult": "fitting", "fit_psi_delta": "fitting",
     "FitAtBoundWarning": "fitting", "fit_joint": "joint", "joint_parameter_names": "joint",
     "EllipsometryModel": "model", "read_model": "model", "dispersion_material": "model",
