@@ -9,9 +9,12 @@ floor because only matching (and later calibration) consumes them.
 - :mod:`~nmmm.matching.metamerism` — the CIEDE2000 residual vector and the CIE special
   metamerism index for a change of illuminant.
 - :mod:`~nmmm.matching.recipe_match` — :func:`match_recipe` over a :class:`RecipeModel`.
+- :mod:`~nmmm.matching.calibration` — :func:`calibrate_colourant`: a compound's k scale
+  (Kramers–Kronig-consistent n) and size scale fitted on a measured ladder.
 - :mod:`~nmmm.matching.outputs` — the ``nmmm match`` result folder.
 """
 
+from nmmm.matching.calibration import CalibrationResult, LadderSample, calibrate_colourant, write_calibrated_material
 from nmmm.matching.measured_files import (
     MeasuredSpectra,
     cxf_geometries,
@@ -26,9 +29,12 @@ from nmmm.matching.metamerism import delta_e2000_residuals, delta_lch, metameris
 from nmmm.matching.recipe_match import MatchResult, RecipeModel, match_recipe, parse_bound
 
 __all__ = [
+    "CalibrationResult",
+    "LadderSample",
     "MatchResult",
     "MeasuredSpectra",
     "RecipeModel",
+    "calibrate_colourant",
     "cxf_geometries",
     "delta_e2000_residuals",
     "delta_lch",
@@ -39,6 +45,7 @@ __all__ = [
     "read_cxf",
     "read_measured",
     "read_spectra_csv",
+    "write_calibrated_material",
     "write_cgats",
     "write_cxf",
 ]
