@@ -30,6 +30,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "compare": ("nmmm.recipes.cli:compare", "Compare two recipes (substitution view)."),
     "sweep": ("nmmm.recipes.cli:sweep", "Parameter sweep of a recipe on Dask."),
     "match": ("nmmm.matching.cli:match", "Match a recipe's free keys to a measured colour."),
+    "calibrate": ("nmmm.matching.cli:calibrate", "Calibrate a colourant on a measured ladder."),
 }
 
 

@@ -1,6 +1,7 @@
 """``nmmm match TARGET RECIPE --vary ...`` writes a complete result folder (issue 17 item 3)."""
 
 import csv
+from pathlib import Path
 
 import numpy as np
 
@@ -43,3 +44,28 @@ def test_match_cli_bad_input_is_one_line(tmp_path, capsys):
     rc = main(["match", "lab:50,10", str(example_path("hematite_tint")), "--vary", "pigments.0.fraction=0:0.1"])
     assert rc == 2 and "lab:L,a,b" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "data" / "matching"
+
+
+def test_calibrate_cli_on_the_shipped_ladder(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "cal"
+    assert main(["calibrate", str(EXAMPLES / "ladder.toml"), "-o", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "k_scale = 1.2" in said and "1:2 (left out)" in said
+    got = json.loads((out / "calibration.json").read_text())
+    assert abs(got["values"]["k_scale"] - 1.25) < 3 * got["standard_errors"]["k_scale"] + 1e-3
+    assert got["de00_after"]["1:2"] <= 1.0 < got["de00_before"]["1:2"]
+    rows = list(csv.DictReader((out / "calibration.csv").open()))
+    assert [r["role"] for r in rows].count("left out") == 1
+    assert "wavelength_nm,n,k" in (out / "hematite_calibrated.csv").read_text()
+
+
+def test_match_cli_reads_the_shipped_cxf_batch(tmp_path, capsys):
+    out = tmp_path / "m"
+    assert main(["match", str(EXAMPLES / "batch.cxf"), str(EXAMPLES / "tint_base.toml"), "--vary",
+                 "pigments.0.fraction=0.005:0.08", "-o", str(out), "--no-progress"]) == 0
+    assert "pigments.0.fraction = 0.021" in capsys.readouterr().out

@@ -48,6 +48,7 @@ class LadderSample:
     name: str
     recipe: object  # raw dict or path
     reflectance: np.ndarray
+    base_dir: object = None  # folder a raw dict's relative files resolve from
 
 
 @dataclass
@@ -71,6 +72,7 @@ class _Sample:
         from nmmm.recipes.schema import parse_recipe, read_toml
 
         raw, _, base = read_toml(s.recipe)
+        base = base if base is not None else s.base_dir
         self.raw, self.base, self.name = raw, base, s.name
         rec = parse_recipe(raw, base_dir=base)
         if compound not in rec.compounds:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-__all__ = ["match"]
+__all__ = ["match", "calibrate"]
 
 
 def _target(target: str, unit: str, geometry, sample):
@@ -68,3 +68,84 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
                + (", ".join(f"{k} {v:.3f}" for k, v in res.metamerism.items()) or "n/a")
                + f"; {sum(res.evaluations.values())} model evaluations in {res.time_s:.1f} s")
     click.echo(f"results: {files['matches'].parent.resolve()}")
+
+
+def _ladder(path):
+    """Samples of a ladder file (TOML: ``compound``, ``fit``, ``measured``, ``[[samples]]`` with
+    ``name``, ``recipe``, optional ``set = {key = value}``, ``sample`` (name in the measured file),
+    ``left_out``)."""
+    import tomllib
+    from pathlib import Path
+
+    from nmmm.errors import InvalidInputError
+    from nmmm.matching.calibration import LadderSample
+    from nmmm.matching.measured_files import read_measured
+    from nmmm.recipes.run import _grid
+    from nmmm.recipes.schema import parse_recipe, read_toml, set_key
+
+    p = Path(path)
+    try:
+        spec = tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise InvalidInputError(f"{p.name}: not valid TOML ({exc})") from None
+    for key in ("compound", "measured", "samples"):
+        if key not in spec:
+            raise InvalidInputError(f"{p.name}: missing '{key}' (a ladder file names compound, measured and [[samples]])")
+    base = p.parent
+    measured = read_measured(base / spec["measured"], unit=spec.get("unit", "auto"), geometry=spec.get("geometry"))
+    samples, left = [], []
+    for i, s in enumerate(spec["samples"]):
+        if "name" not in s or "recipe" not in s:
+            raise InvalidInputError(f"{p.name}: samples[{i}] needs name and recipe")
+        raw, _, rbase = read_toml(base / s["recipe"])
+        for k, v in s.get("set", {}).items():
+            raw = set_key(raw, k, v)
+        raw.setdefault("name", s["name"])
+        w = _grid(parse_recipe(raw, base_dir=rbase))
+        which = s.get("sample", s["name"])
+        measured.spectrum(which)  # an unknown sample names the file's samples
+        R = measured.on_grid(w)[measured.names.index(which)]
+        samples.append(LadderSample(s["name"], raw, R, rbase))
+        if s.get("left_out", False):
+            left.append(s["name"])
+    return spec, samples, tuple(left)
+
+
+@click.command("calibrate")
+@click.argument("ladder")
+@click.option("-o", "--output", default=None, help="Result folder (default calibrate-<ladder>).")
+@click.option("-i", "--illuminant", default="D65", show_default=True)
+def calibrate(ladder, output, illuminant):
+    """Fit a colourant's k scale and grain-size scale on a measured LADDER (TOML: compound, fit,
+    measured file, [[samples]] with recipe, set, left_out); writes the calibrated compound."""
+    import csv
+    import io
+    import json
+    from pathlib import Path
+
+    from nmmm.atomic_io import atomic_output_dir
+    from nmmm.matching.calibration import CALIBRATION_PARAMETERS, calibrate_colourant, write_calibrated_material
+
+    spec, samples, left = _ladder(ladder)
+    res = calibrate_colourant(samples, spec["compound"], fit=tuple(spec.get("fit", CALIBRATION_PARAMETERS)), left_out=left,
+                              illuminant=illuminant)
+    out = Path(output) if output else Path(f"calibrate-{Path(ladder).stem}")
+    with atomic_output_dir(out) as tmp:
+        buf = io.StringIO()
+        wr = csv.writer(buf)
+        wr.writerow(["sample", "role", f"dE00_before_{illuminant}", f"dE00_after_{illuminant}"])
+        for s in samples:
+            wr.writerow([s.name, "left out" if s.name in left else "fitted", f"{res.de00_before[s.name]:.4f}",
+                         f"{res.de00_after[s.name]:.4f}"])
+        (tmp / "calibration.csv").write_text(buf.getvalue(), encoding="utf-8")
+        write_calibrated_material(res, tmp / f"{spec['compound']}_calibrated.csv")
+        (tmp / "calibration.json").write_text(json.dumps(dict(compound=res.compound, values=res.values,
+                                                              standard_errors=res.standard_errors, de00_before=res.de00_before,
+                                                              de00_after=res.de00_after, left_out=list(left),
+                                                              model_evaluations=res.evaluations, time_s=res.time_s), indent=1),
+                                              encoding="utf-8")
+    click.echo("  ".join(f"{k} = {v:.4f} ± {res.standard_errors[k]:.4f}" for k, v in res.values.items()))
+    for s in samples:
+        click.echo(f"{s.name}{' (left out)' if s.name in left else ''}: dE00 {res.de00_before[s.name]:.2f} -> "
+                   f"{res.de00_after[s.name]:.2f}")
+    click.echo(f"results: {out.resolve()}")
