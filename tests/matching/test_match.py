@@ -129,3 +129,9 @@ def test_three_colourants():
     assert colorimetric.de00 < 0.01
     # the scale of three fractions is weakly identifiable at noise 0.002: the reported errors say so
     assert colorimetric.standard_errors["pigments.1.fraction"] > 0.05
+
+
+def test_metamerism_penalty_runs_and_keeps_the_match(thin_tint):
+    res = match_recipe(thin_tint, thin_tint.reflectance(TRUE, "ad"), metamerism_weight=1.0, test_illuminants=("A", "TL84"))
+    assert res.de00 < 0.01 and max(res.metamerism.values()) < 0.01
+    assert set(res.metamerism) == {"A", "FL11"}
