@@ -23,7 +23,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "homogenize": ("nmmm.homogenize.cli:homogenize", "FFT homogenization of microstructures."),
     "layers": ("nmmm.layers.cli:layers", "Mie scattering, radiative transfer, thin films."),
     "appearance": ("nmmm.appearance.cli:appearance", "BRDFs and multi-angle colour."),
-    "render": ("nmmm.appearance.render.cli:render", "Spectral rendering of plates and objects."),
+    "render": ("nmmm.recipes.render_cli:render", "Spectral rendering of plates and objects."),
     "experiment": ("nmmm.experiment.cli:experiment", "The 2AFC visual validation experiment."),
     "run": ("nmmm.recipes.cli:run", "Run a TOML recipe."),
     "demo": ("nmmm.demo.cli:demo", "Run the seed paper's worked examples into one report."),

@@ -456,6 +456,10 @@ def compute(recipe: Recipe, recipe_text: str = "", progress: bool = True) -> Run
         else:
             try:
                 _MACRO[step](recipe, mats, w, res)
+                if recipe.image is not None and recipe.effect is None:  # a solid paint's plate (issue 19)
+                    from nmmm.recipes.plate_image import add_solid_plate_images
+
+                    add_solid_plate_images(recipe, mats, w, res)
             except RecipeError:
                 raise
             except NmmmError as exc:

@@ -615,8 +615,10 @@ def _check_references(r: Recipe) -> None:
         need("thin_film.substrate", r.thin_film.substrate)
         for j, lay in enumerate(r.thin_film.layers):
             need(f"thin_film.layers[{j}].compound", lay.compound)
-    if r.image is not None and r.effect is None:
-        raise RecipeError("image: a stereo image needs an [effect] paint (flake BRDF)")
+    if r.image is not None and r.effect is None and r.film is None and r.coats is None:
+        raise RecipeError(f"image: a plate image needs a paint ([film], [[coats]] or [effect]); a "
+                          f"[{'plate' if r.plate is not None else 'thin_film'}] recipe has no painted surface "
+                          "to render — remove [image]")
     w0, w1 = r.spectral.start_nm, r.spectral.stop_nm
     if w0 < 360 or w1 > 830:
         raise RecipeError(f"spectral: colours need a grid inside 360–830 nm (the CIE tables); got {w0:g}–{w1:g} nm")

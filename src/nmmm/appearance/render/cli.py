@@ -5,6 +5,8 @@ Commands
 - ``nmmm render plate OUT`` — render a painted plate (default: the seed's grey metallic
   plate, 332 × 240 flake cells) to ``OUT.exr`` (spectral, Fichet et al. 2021 layout) and
   ``OUT.png`` (sRGB); ``--stereo`` writes ``OUT_left.*`` and ``OUT_right.*``.
+  ``--paint RECIPE.toml`` renders any paint recipe (solid film, coat stack, effect paint):
+  the BRDF that gives the recipe's colours on its ``[image]`` plate and wavelength grid.
 - ``nmmm render object OUT`` — a sphere or panel painted with the same paint, through
   Mitsuba 3 (``pip install 'nmmm[mitsuba]'``; a system libLLVM >= 17: ``apt-get install libllvm19``).
   Without them it prints one line saying what to install and exits with status 2.
@@ -22,6 +24,26 @@ from pathlib import Path
 import click
 
 PAINTS = ("grey-metallic", "metallic", "interference", "solid", "white")
+
+#: loaders of ``--paint RECIPE.toml``: callables ``path -> (PaintedPlate, wavelength_nm)``;
+#: :mod:`nmmm.recipes.render_cli` registers the recipe one (this package sits below the recipes)
+PLATE_LOADERS: list = []
+
+
+class _PaintParam(click.ParamType):
+    """A preset name (:data:`PAINTS`) or the path of a recipe file (``*.toml``)."""
+
+    name = "PRESET|RECIPE.toml"
+
+    def convert(self, value, param, ctx):
+        if value in PAINTS:
+            return value
+        if str(value).lower().endswith(".toml"):
+            if not Path(value).is_file():
+                self.fail(f"recipe file {value!r} does not exist; give a recipe path or one of {', '.join(PAINTS)}",
+                          param, ctx)
+            return str(value)
+        self.fail(f"{value!r} is neither a preset ({', '.join(PAINTS)}) nor a recipe file (*.toml)", param, ctx)
 
 
 def _output_stem(output: str, default_name: str) -> str:
@@ -60,7 +82,16 @@ def _plate(paint: str, cells, tilt_deg: float, optical_depth: float, base: float
         return _P(p, fl, (cx * cell_mm, cy * cell_mm))
     if paint == "solid":
         return PaintedPlate(brdf.opaque_paint(base), None, (cx * cell_mm, cy * cell_mm))
-    return PaintedPlate(LambertianBRDF(1.0), None, (cx * cell_mm, cy * cell_mm))
+    if paint == "white":
+        return PaintedPlate(LambertianBRDF(1.0), None, (cx * cell_mm, cy * cell_mm))
+    return _recipe_plate(paint)[0]
+
+
+def _recipe_plate(path: str):
+    """``(PaintedPlate, wavelength_nm)`` of a recipe file through the registered loader."""
+    if not PLATE_LOADERS:
+        raise click.UsageError("--paint RECIPE.toml needs the recipes (run it as `nmmm render plate`)")
+    return PLATE_LOADERS[-1](path)
 
 
 def _lights(light: str, zenith: float, azimuth: float, irradiance: float, env: str | None, env_radiance: float):
@@ -87,7 +118,8 @@ def render():
 
 def _common(f):
     opts = [
-        click.option("--paint", type=click.Choice(PAINTS), default="grey-metallic", show_default=True),
+        click.option("--paint", type=_PaintParam(), default="grey-metallic", show_default=True,
+                     help=f"A preset ({', '.join(PAINTS)}) or a recipe file: its paint on its [image] plate."),
         click.option("--tilt-deg", type=float, default=12.0, show_default=True, help="Flake tilt sigma."),
         click.option("--optical-depth", type=float, default=2.0, show_default=True, help="Flake area per area."),
         click.option("--base", type=float, default=0.3, show_default=True, help="Base internal reflectance."),
@@ -131,9 +163,13 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
 
     output = _output_stem(output, "plate")
     try:
-        plate = _plate(paint, cells, tilt_deg, optical_depth, base, seed)
+        grid = None
+        if paint in PAINTS:
+            plate = _plate(paint, cells, tilt_deg, optical_depth, base, seed)
+        else:  # a recipe: its own paint, plate size and wavelength grid
+            plate, grid = _recipe_plate(paint)
         lights, env = _lights(light, light_zenith_deg, light_azimuth_deg, irradiance, environment, env_radiance)
-        kw = dict(lights=lights, environment=env, glint_spread_deg=glint_spread_deg)
+        kw = dict(lights=lights, environment=env, glint_spread_deg=glint_spread_deg, wavelength_nm=grid)
         if stereo:
             imgs = render_stereo_plate(plate, camera_mm, look_at_mm, interocular_mm, fov_deg, (width, height), **kw)
             named = dict(zip(("_left", "_right"), imgs))
