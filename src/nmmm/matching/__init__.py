@@ -11,9 +11,12 @@ floor because only matching (and later calibration) consumes them.
 - :mod:`~nmmm.matching.recipe_match` — :func:`match_recipe` over a :class:`RecipeModel`.
 - :mod:`~nmmm.matching.calibration` — :func:`calibrate_colourant`: a compound's k scale
   (Kramers–Kronig-consistent n) and size scale fitted on a measured ladder.
+- :mod:`~nmmm.matching.batch_correction` — :func:`correct_batch`: additions that bring a made
+  batch onto its target (offset held, the model's sensitivity at the recipe point).
 - :mod:`~nmmm.matching.outputs` — the ``nmmm match`` result folder.
 """
 
+from nmmm.matching.batch_correction import BatchCorrection, correct_batch
 from nmmm.matching.calibration import CalibrationResult, LadderSample, calibrate_colourant, write_calibrated_material
 from nmmm.matching.measured_files import (
     MeasuredSpectra,
@@ -29,12 +32,14 @@ from nmmm.matching.metamerism import delta_e2000_residuals, delta_lch, metameris
 from nmmm.matching.recipe_match import MatchResult, RecipeModel, match_recipe, parse_bound
 
 __all__ = [
+    "BatchCorrection",
     "CalibrationResult",
     "LadderSample",
     "MatchResult",
     "MeasuredSpectra",
     "RecipeModel",
     "calibrate_colourant",
+    "correct_batch",
     "cxf_geometries",
     "delta_e2000_residuals",
     "delta_lch",
