@@ -291,7 +291,10 @@ class LatLongEnvironment:
         if r.ndim != 3 or r.shape[2] != w.size:
             raise InvalidInputError(f"radiance must be (height, width, {w.size}) on wavelength_nm, got {r.shape}")
         if np.any(r < 0):
-            raise InvalidInputError("environment radiance must be >= 0")
+            i, j, k = (int(x) for x in np.argwhere(r < 0)[0])
+            raise InvalidInputError(f"environment radiance must be >= 0 (an emitted radiance); texel (row {i}, column "
+                                    f"{j}) at {w[k]:g} nm is {r[i, j, k]:g} ({int(np.sum(r < 0))} negative values): "
+                                    "clip the map at 0 or fix its calibration")
         object.__setattr__(self, "wavelength_nm", w)
         object.__setattr__(self, "radiance", r)
 
