@@ -9,14 +9,17 @@ from nmmm.demo.paint_systems import WHITE_PVCS, demo, rutile
 from nmmm.recipes.figures import MissingAxisLabelWarning
 
 
-def test_rutile_is_devore_1951():
-    # the database's tabulation of DeVore (1951) (refractiveindex.info main/TiO2/Devore-o, -e), 450-700 nm
-    from nmmm.materials import get, uniaxial_mean
+def test_rutile_is_measured_over_the_grid():
+    # measured n and k of Siefke et al. 2016 (refractiveindex.info main/TiO2/Siefke) over 380-780 nm,
+    # not DeVore's Sellmeier (fitted from 430 nm) extrapolated with k = 0: no out-of-range wavelengths
+    from nmmm.materials import get
 
-    w = np.arange(450.0, 701.0, 50.0)
-    ref = uniaxial_mean(get("main/TiO2/Devore-o"), get("main/TiO2/Devore-e")).nk(w)
+    w = np.arange(380.0, 781.0, 10.0)
     n = rutile().nk(w)
-    assert np.max(np.abs(n - ref)) < 2e-3 and np.all(n.imag == 0)
+    assert np.array_equal(n, get("main/TiO2/Siefke").nk(w))
+    assert rutile().range_nm[0] <= 380 and rutile().range_nm[1] >= 780
+    assert n.imag[0] > 1e-3 and np.all(n.imag[w <= 410] > 0)  # absorbs towards the band edge
+    assert np.all(np.diff(n.real) < 0)  # normal dispersion, no steep rise at 410 nm
 
 
 def test_demo(tmp_path):
@@ -45,3 +48,4 @@ def test_demo(tmp_path):
     sce = coats["full stack, adding-doubling, de:8"]["R at 650 nm (1)"]
     # specular included - excluded = the clear coat's Fresnel reflectance at normal incidence, ((n-1)/(n+1))^2
     assert abs((sci - sce) - (0.52 / 2.52) ** 2) < 1e-3
+

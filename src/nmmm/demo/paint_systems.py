@@ -1,6 +1,6 @@
 """Worked example: real paint systems (issue 16) — a tint ladder, a white's hiding, a three-coat solid.
 
-- :func:`rutile` — rutile TiO2, the uniaxial mean of DeVore's (1951) Sellmeier indices.
+- :func:`rutile` — TiO2 with measured n and k over the whole grid (Siefke et al. 2016, an ALD film).
 - :func:`demo` — figures, CSV tables and text for ``nmmm demo``, from :mod:`nmmm.layers.coat_stack`,
   :mod:`nmmm.layers.pigment_mixture` and :mod:`nmmm.layers.formulation`.
 
@@ -24,14 +24,14 @@ The three parts, with the choices made (stated so they can be changed):
    interface (di:8 and de:8) next to Kubelka–Munk + Saunderson (Kubelka 1954 for the layers), and
    the stack without its clear coat.
 
-The grid is 400–700 nm every 10 nm; DeVore's formula is fitted on 430–1530 nm and extrapolated
-down to 400 nm, where real rutile starts absorbing (band edge ≈ 410 nm: a white here is
-slightly too blue-white in the violet).
+The grid is 400–700 nm every 10 nm, inside the TiO2 data (no extrapolation). That TiO2 is a
+measured film, not bulk rutile (see :func:`rutile`): its n is ≈ 0.2–0.5 lower and its band edge
+weaker, so the whites hide a little less and are slightly bluer in the violet than a rutile
+pigment's.
 
 References
 ----------
-- J. R. DeVore, "Refractive indices of rutile and sphalerite", J. Opt. Soc. Am. 41, 416 (1951).
-  doi:10.1364/JOSA.41.000416
+- T. Siefke et al., Adv. Opt. Mater. 4, 1780 (2016), doi:10.1002/adom.201600250 (TiO2 n, k).
 - M. R. Querry, *Optical constants*, US Army CRDC report CRDC-CR-85034 (1985) (hematite).
 - ISO 6504-3:2019 (contrast ratio); ISO 787-24:1985 (tinting strength).
 - P. Kubelka, "New contributions to the optics of intensely light-scattering materials. Part II:
@@ -61,18 +61,25 @@ RUTILE_NODES = 24
 
 
 def rutile():
-    """Rutile TiO2: mean of DeVore's (1951) ordinary and extraordinary Sellmeier indices,
-    n_o² = 5.913 + 0.2441/(λ² − 0.0803), n_e² = 7.197 + 0.3322/(λ² − 0.0843) (λ in µm), written
-    as :class:`nmmm.materials.models.Sellmeier` (A − B/C + (B/C) λ²/(λ² − C))."""
-    from nmmm.materials import uniaxial_mean
-    from nmmm.materials.models import Sellmeier
+    """TiO2 standing in for rutile: the measured n **and** k of Siefke et al. (2016), database entry
+    ``main/TiO2/Siefke`` (an ALD film of 350 nm, Ratzsch et al. 2015; ellipsometry and
+    spectrophotometry 0.12–125 µm fitted with Franta's universal dispersion model).
 
-    ref = "J. R. DeVore, J. Opt. Soc. Am. 41, 416 (1951), fitted 430-1530 nm"
-    o = Sellmeier(A=5.913 - 0.2441 / 0.0803, B=(0.2441 / 0.0803,), C=(0.0803,), name="rutile (DeVore, ordinary)",
-                  reference=ref)
-    e = Sellmeier(A=7.197 - 0.3322 / 0.0843, B=(0.3322 / 0.0843,), C=(0.0843,), name="rutile (DeVore, extraordinary)",
-                  reference=ref)
-    return uniaxial_mean(o, e)
+    Why not bulk rutile: the database's rutile crystals (DeVore 1951, Bond 1965) are Sellmeier fits
+    of n alone starting at 430–450 nm, so a 400 nm grid would extrapolate them with k = 0 past the
+    band edge (≈ 410 nm), where their n rises steeply (a false reflectance peak at 410 nm). No
+    rutile set with n and k over 380–780 nm is in the database; of the sets that cover it with a
+    measured k (Siefke, Franta; Sarkar's k is 0), Siefke's has the higher n (2.44 at 550 nm against
+    2.65 / 2.95 for DeVore's o / e), so hiding here is lower than a rutile pigment's, and its violet
+    absorption is far weaker than rutile's (k = 6e-4 at 400 nm, 4e-3 at 380 nm): tints keep some
+    violet reflectance (a rose rather than salmon hue).
+
+    Reference: T. Siefke et al., "Materials pushing the application limits of wire grid polarizers
+    further into the deep ultraviolet spectral range", Adv. Opt. Mater. 4, 1780–1786 (2016),
+    doi:10.1002/adom.201600250."""
+    from nmmm.materials import get
+
+    return get("main/TiO2/Siefke")
 
 
 def _write_csv(path, rows):
