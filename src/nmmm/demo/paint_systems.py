@@ -16,13 +16,13 @@ The three parts, with the choices made (stated so they can be changed):
 2. **White paint.** The same rutile in a clear binder n = 1.50 (an acrylic), PVC 5–25 %, contrast
    ratio (ISO 6504-3: Y over black / Y over a white of 0.80, D65/2°, de:8) against dry film
    thickness 3–100 µm, the hiding thickness at CR 0.98 and its spreading rate; then the contrast
-   ratio of a 25 µm film against PVC 5–70 % with and without crowding (multi-component
+   ratio of a 2.5 µm film against PVC 5–70 % with and without crowding (multi-component
    Percus–Yevick), CPVC 0.50 (above it air voids scatter: "dry hiding").
 3. **Three-coat automotive solid.** Clear coat 40 µm (n 1.52) | red basecoat 15 µm (hematite 180 nm,
    8 %, n 1.50) | grey primer 25 µm (rutile 10 % + a carbon-like black n = 1.8 + 0.6i of 50 nm, 0.5 %,
    n 1.55) on steel (n = 2.5 + 3.3i), as ``three_coat_solid.toml``: adding–doubling through every
    interface (di:8 and de:8) next to Kubelka–Munk + Saunderson (Kubelka 1954 for the layers), and
-   the stack without its clear coat.
+   the stack without its clear coat. All grains log-normal (σg 1.25 hematite, 1.3 rutile and black).
 
 The grid is 400–700 nm every 10 nm, inside the TiO2 data (no extrapolation). That TiO2 is a
 measured film, not bulk rutile (see :func:`rutile`): its n is ≈ 0.2–0.5 lower and its band edge
@@ -54,8 +54,9 @@ WHITE_PVCS = (0.05, 0.10, 0.15, 0.20, 0.25)
 WHITE_THICKNESS_UM = tuple(np.round(np.geomspace(3.0, 100.0, 12), 2))
 PVC_SERIES = tuple(np.round(np.arange(0.05, 0.701, 0.05), 2))
 WHITE_CPVC = 0.50
-#: film thickness of the contrast ratio against PVC (thin enough not to be saturated)
-PVC_SERIES_UM = 10.0
+#: film thickness of the contrast ratio against PVC: thin enough not to be saturated (at 10 µm every
+#: PVC above 15 % gives CR > 0.97 and hides the crowding and the jump above the CPVC)
+PVC_SERIES_UM = 2.5
 #: size nodes of the rutile distribution: 6 leave Mie ripples of 0.02 in a tint's reflectance, 24 do not
 RUTILE_NODES = 24
 
@@ -145,13 +146,15 @@ def _white(w, tio2):
 
 def _three_coat(w, hem, tio2):
     from nmmm.layers.coat_stack import Coat, CoatStack, Substrate, coat_optics, stack_reflectance
-    from nmmm.layers.distributions import monodisperse
+    from nmmm.layers.distributions import lognormal
     from nmmm.layers.pigment_mixture import Component
 
+    # log-normal grains as in the tint ladder (monodisperse spheres leave Mie ripples in the spectra)
     clear = Coat("clear coat", 40e3, 1.52)
-    base = Coat("red basecoat", 15e3, 1.50, [Component(hem, monodisperse(180.0), 0.08, "hematite")])
-    primer = Coat("grey primer", 25e3, 1.55, [Component(tio2, monodisperse(230.0), 0.10, "rutile"),
-                                               Component(1.8 + 0.6j, monodisperse(50.0), 0.005, "black")])
+    base = Coat("red basecoat", 15e3, 1.50, [Component(hem, lognormal(180.0, 1.25, n_nodes=12), 0.08, "hematite")])
+    primer = Coat("grey primer", 25e3, 1.55,
+                  [Component(tio2, lognormal(230.0, 1.3, n_nodes=RUTILE_NODES), 0.10, "rutile"),
+                   Component(1.8 + 0.6j, lognormal(50.0, 1.3, n_nodes=6), 0.005, "black")])
     steel = Substrate(compound=2.5 + 3.3j)
     full = CoatStack([clear, base, primer], steel)
     bare = CoatStack([base, primer], steel)
@@ -242,7 +245,7 @@ def demo(output_dir) -> dict:
     white_rows = [{"PVC (1)": pvc, "contrast ratio at 25 µm (1)": round(float(np.interp(np.log(25.0), np.log(WHITE_THICKNESS_UM),
                                                                                   curves[pvc])), 4),
                    "hiding thickness (µm)": round(hiding[pvc] / 1e3, 2) if np.isfinite(hiding[pvc]) else "not below 10 mm",
-                   "spreading rate (m²/L)": round(spreading_rate_m2_per_L(hiding[pvc]), 2) if np.isfinite(hiding[pvc]) else 0.0}
+                   "spreading rate (m²/L of dry film)": round(spreading_rate_m2_per_L(hiding[pvc]), 2) if np.isfinite(hiding[pvc]) else 0.0}
                   for pvc in WHITE_PVCS]
     t2 = _write_csv(out / "white_hiding.csv", white_rows)
 
