@@ -132,3 +132,23 @@ def test_bad_indices_and_solver():
         paint_reflectance(PaintFilm(PIG, 1.5 - 1e-6j, monodisperse(D), 0.05, 1e4), W)
     with pytest.raises(InvalidInputError):
         paint_reflectance(PaintFilm(PIG, N_B, monodisperse(D), 0.05, 1e4), W, solver="monte-carlo")
+
+
+def test_body_reflectance_refuses_impossible_readings_and_clips_only_rounding():
+    # Saunderson (1942) inverted: a reading below k1 (specular included) or above 1 has no Lambertian body;
+    # it used to be clipped to 0 or 1 silently
+    from nmmm.layers.kubelka_munk import saunderson, saunderson_k1, saunderson_k2
+    from nmmm.layers.paint import body_reflectance_from_reading
+
+    k1, k2 = saunderson_k1(1.5), saunderson_k2(1.5)
+    w = np.array([400.0, 450.0, 500.0])
+    with pytest.raises(InvalidInputError, match=r"at 450 nm: R = 0\.02 .*between k1"):
+        body_reflectance_from_reading(np.array([0.3, 0.02, 0.3]), 1.5, "included", wavelength_nm=w)
+    with pytest.raises(InvalidInputError, match=r"at index 1: R = 1\.2 "):
+        body_reflectance_from_reading(np.array([0.3, 1.2]), 1.5, "excluded")
+    with pytest.raises(InvalidInputError, match=r"R = -0\.01"):
+        body_reflectance_from_reading(-0.01, 1.5)
+    edge = saunderson(np.array([0.0, 1.0]), k1, k2, specular="included") + np.array([-1e-13, 1e-13])
+    np.testing.assert_allclose(body_reflectance_from_reading(edge, 1.5, "included"), [0.0, 1.0], atol=1e-11)
+    rho = body_reflectance_from_reading(edge, 1.5, "included")
+    assert rho.min() >= 0.0 and rho.max() <= 1.0

@@ -352,7 +352,8 @@ def compare_km_ad(film: PaintFilm, wavelength_nm: ArrayLike, specular: str = "in
     }
 
 
-def body_reflectance_from_reading(reflectance, n_binder, specular: str = "excluded") -> np.ndarray:
+def body_reflectance_from_reading(reflectance, n_binder, specular: str = "excluded",
+                                  wavelength_nm=None) -> np.ndarray:
     """The internal diffuse (Lambertian) body reflectance ρ whose Saunderson (1942) reading
     R = [k1] + (1 − k1)(1 − k2) ρ / (1 − k2 ρ) equals ``reflectance`` (0°/d, ``specular``
     included or excluded), k1 and k2 of the binder's surface (:func:`saunderson_k1`,
@@ -361,6 +362,11 @@ def body_reflectance_from_reading(reflectance, n_binder, specular: str = "exclud
     A solid-paint BRDF built on this ρ (:class:`nmmm.appearance.brdf.PaintBRDF`) reads the
     same 0°/d spectrum as the film's adding–doubling solution, and its other geometries
     follow from the Lambertian-body picture.
+
+    A reading no Lambertian body can give (ρ outside [0, 1] by more than 1e-9 of rounding, e.g. R
+    below the surface's k1 with the specular included, or above 1) raises
+    :class:`~nmmm.errors.InvalidInputError` naming the wavelength (``wavelength_nm``, same shape as
+    ``reflectance``, when given; else the index) and R; only rounding noise is clipped.
 
     >>> R = saunderson(0.5, saunderson_k1(1.5), saunderson_k2(1.5), specular="excluded")
     >>> round(float(body_reflectance_from_reading(R, 1.5)), 9)
@@ -372,4 +378,15 @@ def body_reflectance_from_reading(reflectance, n_binder, specular: str = "exclud
     n = np.real(np.asarray(n_binder))
     k1, k2 = saunderson_k1(n), saunderson_k2(n)
     x = (R - (k1 if specular == "included" else 0.0)) / ((1 - k1) * (1 - k2))
-    return np.clip(x / (1 + k2 * x), 0.0, 1.0)
+    rho = x / (1 + k2 * x)
+    bad = (rho < -1e-9) | (rho > 1 + 1e-9) | (1 + k2 * x <= 0)
+    if np.any(bad):
+        i = np.unravel_index(int(np.argmax(bad)), np.shape(bad))
+        at = lambda v: float(np.broadcast_to(np.asarray(v, float), np.shape(bad))[i])  # noqa: E731
+        where = f"at {at(wavelength_nm):g} nm" if wavelength_nm is not None else f"at index {i[0] if len(i) == 1 else i}"
+        low = "k1 (the surface's specular reflectance)" if specular == "included" else "0"
+        raise InvalidInputError(
+            f"reflectance {where}: R = {at(R):.6g} implies a body reflectance {at(rho):.6g} outside [0, 1] under a "
+            f"binder surface of n = {at(n):g}, specular {specular}: R must lie between {low} and 1 "
+            f"({int(np.sum(bad))} of {np.size(bad)} values are outside)")
+    return np.clip(rho, 0.0, 1.0)
