@@ -35,6 +35,7 @@ from nmmm.appearance.render.plate import (
     LambertianBRDF,
     PaintedPlate,
     SpectralImage,
+    ViewingBooth,
     render_plate,
     deposit_metallic_plate,
     render_stereo_plate,
@@ -63,4 +64,5 @@ __all__ = [
     "render_stereo_plate",
     "seed_metallic_plate",
     "deposit_metallic_plate",
+    "ViewingBooth",
 ]

@@ -153,9 +153,14 @@ def _common(f):
 @click.option("--interocular-mm", type=float, default=65.0, show_default=True)
 @click.option("--glint-spread-deg", type=float, default=1.0, show_default=True)
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the flake unit cell.")
+@click.option("--booth", type=click.Choice(("none", "45", "overhead")), default="none", show_default=True,
+              help="Put the plate in a grey viewing booth lit by a D65 source at 45 deg or overhead "
+                   "(replaces --light and --environment; ViewingBooth).")
+@click.option("--wall-reflectance", type=float, default=0.2, show_default=True, help="Booth walls and floor.")
+@click.option("--illuminance-lux", type=float, default=2000.0, show_default=True, help="Booth: at the plate centre.")
 def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_deg, light_azimuth_deg, irradiance,
               environment, env_radiance, width, height, exposure, colourspace, cells, camera_mm, look_at_mm, fov_deg, stereo,
-              interocular_mm, glint_spread_deg, seed):
+              interocular_mm, glint_spread_deg, seed, booth, wall_reflectance, illuminance_lux):
     """Render a painted plate to OUTPUT.exr and OUTPUT.png."""
     from nmmm.appearance.render.camera import PinholeCamera
     from nmmm.appearance.render.plate import render_plate, render_stereo_plate
@@ -168,7 +173,16 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
             plate = _plate(paint, cells, tilt_deg, optical_depth, base, seed)
         else:  # a recipe: its own paint, plate size and wavelength grid
             plate, grid = _recipe_plate(paint)
-        lights, env = _lights(light, light_zenith_deg, light_azimuth_deg, irradiance, environment, env_radiance)
+        if booth != "none":
+            from nmmm.appearance.render.lights import default_wavelengths
+            from nmmm.appearance.render.plate import ViewingBooth
+
+            vb = ViewingBooth(source=booth, wall_reflectance=wall_reflectance, floor_reflectance=wall_reflectance,
+                              illuminant=light, illuminance_lux=illuminance_lux)
+            scene = vb.scene(plate, default_wavelengths() if grid is None else grid)
+            lights, env = scene["lights"], scene["environment"]
+        else:
+            lights, env = _lights(light, light_zenith_deg, light_azimuth_deg, irradiance, environment, env_radiance)
         kw = dict(lights=lights, environment=env, glint_spread_deg=glint_spread_deg, wavelength_nm=grid)
         if stereo:
             imgs = render_stereo_plate(plate, camera_mm, look_at_mm, interocular_mm, fov_deg, (width, height), **kw)

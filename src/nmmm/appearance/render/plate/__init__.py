@@ -61,6 +61,9 @@ Public objects
 - :class:`SpectralImage` — radiance (H, W, L), ``to_xyz``, ``to_srgb`` (exposure),
   ``to_display_rgb`` (sRGB / Display P3), ``write_png``, ``write_exr`` (Fichet et al. 2021 layout).
 - :func:`render_plate`, :func:`render_stereo_plate`.
+- :class:`ViewingBooth` — the seed's viewing scene: a grey booth (walls and floor of stated
+  reflectance) and a D65 source overhead or at 45°: ``lights()`` and ``environment(w)``
+  for :func:`render_plate`.
 
 References
 ----------
@@ -75,6 +78,7 @@ References
 """
 
 # private helpers other modules and tests use through this path
+from nmmm.appearance.render.plate.environment import ViewingBooth
 from nmmm.appearance.render.plate.glints import _render_glints, _tilt_variants  # noqa: F401
 from nmmm.appearance.render.plate.renderer import (  # noqa: F401
     _light_at,
@@ -98,4 +102,5 @@ __all__ = [
     "deposit_metallic_plate",
     "render_plate",
     "render_stereo_plate",
+    "ViewingBooth",
 ]
