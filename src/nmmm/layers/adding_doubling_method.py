@@ -262,6 +262,11 @@ def _diamond(a, dtau, nu, w, hp, hm):
     return 0.5 * (P - Q), 0.5 * (P + Q)
 
 
+#: finite slabs of a batch whose doubling counts are within this many of the largest are doubled
+#: alike (whole-array steps); the others keep their own count (see :func:`_slab`)
+AD_ALIGN_DOUBLINGS = 10
+
+
 def _slab(a, tau, chi, nu, w, N):
     """Radiance operators (R, T) of homogeneous slabs by diamond start + doubling."""
     hp, hm, f = _redistribution(chi, nu, w, N)
@@ -272,8 +277,12 @@ def _slab(a, tau, chi, nu, w, N):
     start_max = np.minimum(nu_min / 4, 2e-3)  # diamond start error O(dtau³) per thin layer
     with np.errstate(divide="ignore", invalid="ignore"):
         k = np.where(tau_s > start_max, np.ceil(np.log2(np.where(inf, 1.0, tau_s) / start_max)), 0)
-    if np.any(~inf):  # finite slabs of a batch double alike: the thinner ones start thinner (only more
-        k = np.where(inf, k, k[~inf].max())  # accurate), and every step runs on whole arrays (no masked copies)
+    if np.any(~inf):  # finite slabs within AD_ALIGN_DOUBLINGS of the batch's largest count double alike
+        # (the thinner start thinner, and every step runs on whole arrays, no masked copies); beyond that
+        # the round-off of T ~ 1 grows as 2^k and a thin slab batched with a huge one lost accuracy
+        # (tau 1e9: 2e-5, 1e12: 3e-2), so those keep their own count
+        kmax = k[~inf].max()
+        k = np.where(~inf & (k >= kmax - AD_ALIGN_DOUBLINGS), kmax, k)
     k = np.where(inf, 60, k).astype(int)  # up to 2^60 thin layers, stopped when T ~ 0
     dtau = np.where(inf, start_max, tau_s / 2.0**k)
     R, T = _diamond(a_s, dtau, nu, w, hp, hm)
