@@ -108,6 +108,25 @@ def test_bad_inputs_say_what_is_right():
         size_damped(au, 0.0)
 
 
+def test_only_free_electron_metals_and_the_metal_from_the_key():
+    # a dielectric (silica: Re eps 2.1) would get a false k from the Drude correction (it got k = 0.245);
+    # silver data were damped with gold's free-electron parameters by default
+    with pytest.raises(InvalidInputError, match=r"Re eps = 2\.1\d* >= 0 at 400 nm.*free-electron metals"):
+        size_damped("main/SiO2/Malitson", 5.0, metal="gold")
+    ag = size_damped("main/Ag/Johnson", 5.0)
+    assert ag.metadata["metal"] == "silver" and size_damped("main/Au/Johnson", 5.0).metadata["metal"] == "gold"
+    # silver's own parameters (Rakic 1998 LD fit): the correction equals kreibig_damped_eps with them
+    bulk, w = get("main/Ag/Johnson"), np.array([400.0, 550.0])
+    np.testing.assert_allclose(ag.eps(w), kreibig_damped_eps(bulk.eps(w), w, 5.0, metal="silver"), rtol=1e-14)
+    assert np.all(np.abs(ag.eps(w) - kreibig_damped_eps(bulk.eps(w), w, 5.0, metal="gold")) > 1e-3)
+    with pytest.raises(InvalidInputError, match="metal='gold', but the key names silver"):
+        size_damped("main/Ag/Johnson", 5.0, metal="gold")
+    with pytest.raises(InvalidInputError, match=r"cannot tell which metal.*give metal="):
+        size_damped(Drude(plasma_ev=9.0, gamma_ev=0.05), 5.0)
+    p = FREE_ELECTRON_PARAMETERS["gold"]  # explicit parameters for an unnamed Drude metal
+    assert size_damped(Drude(plasma_ev=9.0, gamma_ev=0.05), 5.0, metal=p).metadata["metal"] == "custom"
+
+
 def test_recipe_key_size_damping():
     from nmmm.errors import RecipeError
     from nmmm.recipes.run import build_materials

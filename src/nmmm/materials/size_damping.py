@@ -106,6 +106,43 @@ def _parameters(metal) -> FreeElectronParameters:
             "reference=...)") from None
 
 
+#: element symbols in a key or name (``main/Au/Johnson``, ``Ag (Palik)``) → FREE_ELECTRON_PARAMETERS key
+_SYMBOLS = {"Au": "gold", "Ag": "silver"}
+
+
+def _metal_of(bulk: Material, metal):
+    """The metal named by ``metal`` or read from the material's key/name (see :func:`size_damped`)."""
+    import re
+
+    name = str(getattr(bulk, "name", ""))
+    found = {_SYMBOLS[t] for t in re.findall(r"(?<![A-Za-z])(Au|Ag)(?![a-z])", name)}
+    found |= {m for m in FREE_ELECTRON_PARAMETERS if m in name.lower()}
+    if metal is None:
+        if len(found) != 1:
+            raise InvalidInputError(
+                f"size damping of {name!r}: cannot tell which metal it is from its key or name "
+                f"({'both ' + ' and '.join(sorted(found)) if found else 'no Au/Ag'}); give metal= one of "
+                f"{sorted(FREE_ELECTRON_PARAMETERS)} (or FreeElectronParameters); only free-electron metals are damped")
+        return found.pop()
+    if isinstance(metal, str) and metal.lower() in FREE_ELECTRON_PARAMETERS and found and metal.lower() not in found:
+        raise InvalidInputError(f"size damping of {name!r}: metal={metal!r}, but the key names "
+                                f"{' and '.join(sorted(found))}; give the metal the data are of (or leave metal out)")
+    return metal
+
+
+def _check_free_electron_metal(bulk: Material) -> None:
+    """Refuse a material whose Re ε is not < 0 over the visible part of its range (not a metal)."""
+    lo, hi = bulk.range_nm
+    w = np.linspace(max(lo, 400.0), min(hi, 700.0), 31) if lo < 700 and hi > 400 else np.array([lo, hi])
+    e1 = bulk.eps(w[np.isfinite(w)]).real
+    if np.any(e1 >= 0):
+        i = int(np.argmax(e1 >= 0))
+        raise InvalidInputError(
+            f"size damping of {bulk.name!r}: Re eps = {e1[i]:.3g} >= 0 at {w[i]:g} nm; the Kreibig damping is for "
+            "free-electron metals (Re eps < 0 over the visible, e.g. gold, silver); a dielectric would get a false "
+            "absorption — remove size_damping for this material")
+
+
 def kreibig_damped_eps(eps_bulk: ArrayLike, wavelength_nm: ArrayLike, radius_nm: ArrayLike, *, A: float = 1.0,
                        metal: str = "gold") -> np.ndarray:
     """ε of a metal sphere of radius R with surface-scattering damping (Kreibig model).
@@ -151,9 +188,17 @@ def kreibig_damped_eps(eps_bulk: ArrayLike, wavelength_nm: ArrayLike, radius_nm:
     return np.asarray(eps_bulk, dtype=complex) + wp2 / (E * E + 1j * p.gamma_bulk_ev * E) - wp2 / (E * E + 1j * gamma_r * E)
 
 
-def size_damped(material: Material | str, radius_nm: float, *, A: float = 1.0, metal: str = "gold") -> Material:
+def size_damped(material: Material | str, radius_nm: float, *, A: float = 1.0,
+                metal: str | FreeElectronParameters | None = None) -> Material:
     """``material`` (bulk metal: Material or database key) with the Kreibig damping of a sphere of
     radius ``radius_nm``, as a Material over the same wavelength range.
+
+    ``metal`` (whose free-electron parameters, :data:`FREE_ELECTRON_PARAMETERS`) is read from the
+    key or name when not given (``Au`` → gold, ``Ag`` → silver, e.g. ``main/Au/Johnson``); a
+    material it cannot be read from needs ``metal=``, and a ``metal`` that contradicts the key is
+    refused. A material whose Re ε is not negative over the visible part (400–700 nm) of its
+    range is not a free-electron metal and is refused (the Drude correction would give a
+    dielectric a false absorption). All refusals are :class:`~nmmm.errors.InvalidInputError`.
 
     >>> m = size_damped("main/Au/Johnson", 5.0)
     >>> from nmmm.materials.database import get
@@ -166,6 +211,8 @@ def size_damped(material: Material | str, radius_nm: float, *, A: float = 1.0, m
         material = get(material)
     bulk = as_material(material)
     R = float(check_positive(radius_nm, "radius_nm"))
+    _check_free_electron_metal(bulk)
+    metal = _metal_of(bulk, metal)
     p = _parameters(metal)
     kreibig_damped_eps(0j, 500.0, R, A=A, metal=p)  # validate A now, not at the first evaluation
 
@@ -176,4 +223,4 @@ def size_damped(material: Material | str, radius_nm: float, *, A: float = 1.0, m
         name=f"{bulk.name}, R = {R:g} nm (Kreibig A = {A:g})", eps_function=eps, components=(bulk,),
         reference=f"{bulk.reference}; size damping gamma(R) = gamma_bulk + A v_F/R (Kreibig & Vollmer 1995) "
                   f"with {p.reference}",
-        metadata={"radius_nm": R, "A": float(A), "metal": metal if isinstance(metal, str) else "custom"})
+        metadata={"radius_nm": R, "A": float(A), "metal": metal.lower() if isinstance(metal, str) else "custom"})
