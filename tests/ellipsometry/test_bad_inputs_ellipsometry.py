@@ -52,6 +52,28 @@ def test_nan_and_truncated_woollam_rows_are_named_never_silent(tmp_path, bad, wh
         read_data(p, strict=True)
 
 
+GOOD4 = [ln.rsplit(" ", 2)[0] for ln in GOOD]  # no sigma columns: a cut last line keeps 4 numbers
+
+
+def test_four_column_last_line_cut_mid_number_is_named(tmp_path):
+    """``E 700 70 26.600 1`` with no final newline in a file without sigma columns: as many numbers
+    as the other lines, but Delta '1' is the start of a number cut off."""
+    p = _write(tmp_path, GOOD4 + ["E 700 70 26.600 1"], newline=False)
+    with pytest.warns(UserWarning, match="last line 9 left out.*newline"):
+        d = read_data(p)
+    assert len(d) == 5 and 700.0 not in d.wavelength_nm
+    assert d.metadata["scan"].dropped_cut == (9,)
+    with pytest.raises(DataFileError, match="last line 9.*strict"):
+        read_data(p, strict=True)
+    # the same line ended by a newline was written whole: read as data, no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(read_data(_write(tmp_path, GOOD4 + ["E 700 70 26.600 1"], name="nl.dat"))) == 6
+        # an unterminated last line whose numbers are as long as the others' is whole
+        assert len(read_data(_write(tmp_path, GOOD4 + ["E 700 70 26.600 121.000"], name="ok.dat",
+                                    newline=False))) == 6
+
+
 def test_nan_row_first_is_not_taken_for_a_header(tmp_path):
     p = _write(tmp_path, ["E 580 70 nan nan 0.01 0.05"] + GOOD)
     with pytest.warns(UserWarning, match="NaN.*line 4"):

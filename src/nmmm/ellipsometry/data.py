@@ -232,6 +232,9 @@ class DataScan:
         Repeated (wavelength, angle) points (kept; a fit weights them twice).
     unsorted_angles : tuple of float
         Angles whose wavelengths are not in increasing or decreasing order.
+    dropped_cut : tuple of int
+        The last line, left out because the file does not end with a newline and the line's last
+        number has far fewer digits than that column elsewhere (a file cut off mid-number).
     """
 
     path: str
@@ -240,6 +243,7 @@ class DataScan:
     dropped_truncated: tuple = ()
     duplicates: int = 0
     unsorted_angles: tuple = ()
+    dropped_cut: tuple = ()
 
     @property
     def problems(self) -> list:
@@ -256,6 +260,10 @@ class DataScan:
         if self.dropped_truncated:
             out.append(f"{len(self.dropped_truncated)} truncated line(s) left out, fewer numbers than the other data "
                        f"lines (line {lines(self.dropped_truncated)}; a file cut off mid-line?)")
+        if self.dropped_cut:
+            out.append(f"last line {lines(self.dropped_cut)} left out: the file does not end with a newline and the "
+                       "line's last number has far fewer digits than that column elsewhere (a file cut off "
+                       "mid-number?)")
         if self.duplicates:
             out.append(f"{self.duplicates} repeated (wavelength, angle) point(s), weighted twice in a fit")
         if self.unsorted_angles:
@@ -272,11 +280,30 @@ class DataScan:
         return head + ("; no problems found" if self.clean else "; " + "; ".join(self.problems))
 
 
-def _scan_rows(path, rows, line_nos, min_fields: int, strict: bool, used=(0, 1, 2, 3), sigma=(4, 5)):
+def _digits(field: str) -> int:
+    """Digits in the mantissa of a number as written (``'34.377'`` -> 5, ``'1'`` -> 1)."""
+    return sum(ch.isdigit() for ch in re.split(r"[eE]", field)[0])
+
+
+def _cut_last_line(text: str, fields: list, line_nos) -> tuple:
+    """``(line,)`` when the file does not end with a newline and its last data line's last number
+    has fewer than half the digits (median) of that column in the other lines: a line cut off
+    mid-number (``E 1000 75 34.377 1`` read as Delta = 1 deg); else ``()``."""
+    if not fields or len(fields) < 2 or text.endswith(("\n", "\r")):
+        return ()
+    j = len(fields[-1]) - 1
+    others = [_digits(f[j]) for f in fields[:-1] if len(f) > j]
+    if others and _digits(fields[-1][j]) < 0.5 * float(np.median(others)):
+        return (int(line_nos[-1]),)
+    return ()
+
+
+def _scan_rows(path, rows, line_nos, min_fields: int, strict: bool, used=(0, 1, 2, 3), sigma=(4, 5), cut=()):
     """Drop non-finite and truncated rows of ``rows`` (``(values, count)``: floats NaN-padded to a
     common width and the count of numbers the line held; ``line_nos`` their line numbers),
     returning (array, dropped info). ``min_fields``: the fewest numbers a row may have before it
-    counts as truncated; ``used`` / ``sigma``: the columns read (σ only when the rows have them)."""
+    counts as truncated; ``used`` / ``sigma``: the columns read (σ only when the rows have them);
+    ``cut``: line numbers of a last line cut mid-number (:func:`_cut_last_line`), left out too."""
     counts = np.array([r[1] for r in rows])
     full = int(np.max(counts)) if counts.size else 0
     # the usual width of a data line: lines shorter than it (and shorter than min_fields, or the
@@ -285,13 +312,19 @@ def _scan_rows(path, rows, line_nos, min_fields: int, strict: bool, used=(0, 1, 
     usual = int(values[np.argmax(widths)]) if counts.size else 0
     arr = np.array([r[0] for r in rows], dtype=float) if rows else np.zeros((0, full))
     trunc = (counts < usual) | (counts < min_fields)
-    nonfinite = ~trunc & ~np.all(np.isfinite(arr[:, list(used)]), axis=1) if arr.size else np.zeros(0, bool)
+    cut_row = np.zeros(counts.shape, bool)
+    if cut and counts.size and int(line_nos[-1]) in cut and not trunc[-1]:
+        cut_row[-1] = True  # a short last line is reported as truncated already
+    cut = np.asarray(line_nos)[cut_row]
+    trunc_or_cut = trunc | cut_row
+    nonfinite = ~trunc_or_cut & ~np.all(np.isfinite(arr[:, list(used)]), axis=1) if arr.size else np.zeros(0, bool)
     if arr.size and sigma and usual > max(sigma):  # the sigma columns are read: they must be finite as well
-        nonfinite |= ~trunc & ~np.all(np.isfinite(arr[:, list(sigma)]), axis=1)
-    keep = ~(trunc | nonfinite)
+        nonfinite |= ~trunc_or_cut & ~np.all(np.isfinite(arr[:, list(sigma)]), axis=1)
+    keep = ~(trunc_or_cut | nonfinite)
     info = dict(dropped_nonfinite=tuple(int(n) for n in np.asarray(line_nos)[nonfinite]),
                 dropped_truncated=tuple(int(n) for n in np.asarray(line_nos)[trunc]))
-    if strict and (info["dropped_nonfinite"] or info["dropped_truncated"]):
+    info["dropped_cut"] = tuple(int(n) for n in cut)
+    if strict and (info["dropped_nonfinite"] or info["dropped_truncated"] or info["dropped_cut"]):
         scan = DataScan(str(path), int(keep.sum()), **info)
         raise DataFileError(f"{path}: " + "; ".join(q.replace(" left out", "") for q in scan.problems)
                             + " (strict: fix the file, or run without --strict to leave these rows out)")
@@ -472,7 +505,7 @@ def read_woollam(path, name: str | None = None, strict: bool = False) -> Ellipso
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         text = path.read_text(encoding="latin-1")
-    header, rows, line_nos, skipped = [], [], [], {}
+    header, rows, line_nos, skipped, fields = [], [], [], {}, []
     unit = None
     for i, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
@@ -505,6 +538,7 @@ def read_woollam(path, name: str | None = None, strict: bool = False) -> Ellipso
             nums = m_u.group(1).split()
         count = len(nums)
         nums = nums[:6]  # extra columns (e.g. depolarization) are not used
+        fields.append(nums)
         rows.append(([float(x) for x in nums] + [np.nan] * (6 - len(nums)), min(count, 6)))
         line_nos.append(i)
     if not rows:
@@ -512,7 +546,7 @@ def read_woollam(path, name: str | None = None, strict: bool = False) -> Ellipso
     if unit is None:
         raise DataFileError(f"{path}: no spectral unit line (nm, eV, Angstroms or microns) in the header "
                             f"{header!r}; the last header line of a WVASE file names it")
-    arr, info = _scan_rows(path, rows, line_nos, 4, strict)
+    arr, info = _scan_rows(path, rows, line_nos, 4, strict, cut=_cut_last_line(text, fields, line_nos))
     kind, scale = _UNITS_TO_NM[unit]
     spectral = arr[:, 0]
     if kind == "ev" and np.any(spectral <= 0):
