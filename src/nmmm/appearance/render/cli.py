@@ -158,9 +158,12 @@ def _common(f):
                    "(replaces --light and --environment; ViewingBooth).")
 @click.option("--wall-reflectance", type=float, default=0.2, show_default=True, help="Booth walls and floor.")
 @click.option("--illuminance-lux", type=float, default=2000.0, show_default=True, help="Booth: at the plate centre.")
+@click.option("--tone-map", type=click.Choice(("auto", "knee", "none")), default="auto", show_default=True,
+              help="PNG highlights above display white: 'knee' compresses them (SpectralImage.to_display), 'none' "
+                   "clips; 'auto' is knee in a booth, none otherwise.")
 def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_deg, light_azimuth_deg, irradiance,
               environment, env_radiance, width, height, exposure, colourspace, cells, camera_mm, look_at_mm, fov_deg, stereo,
-              interocular_mm, glint_spread_deg, seed, booth, wall_reflectance, illuminance_lux):
+              interocular_mm, glint_spread_deg, seed, booth, wall_reflectance, illuminance_lux, tone_map):
     """Render a painted plate to OUTPUT.exr and OUTPUT.png."""
     from nmmm.appearance.render.camera import PinholeCamera
     from nmmm.appearance.render.plate import render_plate, render_stereo_plate
@@ -193,11 +196,16 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
     except NmmmError as exc:
         raise click.ClickException(str(exc)) from exc
     files = []
+    tm = ("knee" if booth != "none" else None) if tone_map == "auto" else tone_map
+    display = {}
     for suffix, img in named.items():
         files.append(str(img.write_exr(f"{output}{suffix}.exr")))
-        files.append(str(img.write_png(f"{output}{suffix}.png", exposure=exposure, colourspace=colourspace)))
+        files.append(str(img.write_png(f"{output}{suffix}.png", exposure=exposure, colourspace=colourspace,
+                                       tone_map=tm)))
+        display[suffix.lstrip("_") or "mono"] = img.to_display(colourspace, exposure, tm or "none")[1]
     click.echo(json.dumps({"plate": repr(plate), "files": files,
-                           "glints": {k or "mono": v.metadata["n_glints"] for k, v in named.items()}}, indent=1))
+                           "glints": {k or "mono": v.metadata["n_glints"] for k, v in named.items()},
+                           "display": display}, indent=1))
 
 
 @render.command("object")

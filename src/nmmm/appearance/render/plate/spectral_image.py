@@ -17,7 +17,12 @@ from nmmm.appearance.render.camera import PinholeCamera
 from nmmm.errors import InvalidInputError
 from nmmm.spectra import check_finite
 
-__all__ = ["SpectralImage"]
+__all__ = ["SpectralImage", "TONE_MAP_KNEE"]
+
+#: relative luminance (display white = 1) above which :meth:`SpectralImage.to_display` compresses
+TONE_MAP_KNEE = 0.8
+#: a channel counts as above display white beyond 1 + this (a tenth of the 8-bit step at white)
+WHITE_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True, repr=False)
@@ -98,15 +103,82 @@ class SpectralImage:
                                 chromatic_adaptation_transform="CAT02", apply_cctf_encoding=True)
         return np.clip(rgb, 0.0, 1.0) if clip else rgb
 
+    def to_display(self, colourspace: str = "sRGB", exposure: float = 1.0, tone_map: str = "knee",
+                   knee: float = TONE_MAP_KNEE, display_white_cd_m2: float = 120.0):
+        """Encoded RGB (H, W, 3) in [0, 1] for a calibrated display, and its statistics.
+
+        **Exposure rule**: ``exposure`` = 1 maps a perfect white tile at the plate centre under
+        the same lights (``white_radiance``; in a :class:`ViewingBooth` the booth's white tile)
+        to display white, shown at ``display_white_cd_m2`` (120 cd/m² by default); the lights'
+        white is adapted to D65 (CAT02).
+
+        **Tone mapping** (``tone_map="knee"``): relative luminance x (display white = 1) is
+        kept below ``knee`` and above it compressed as
+        y = k + (1 − k)(1 − exp(−(x − k)/(1 − k))) — continuous with slope 1 at k, tending
+        to display white — with the pixel's chromaticity kept (linear RGB scaled by y/x); a
+        pixel with a channel still above 1 (a saturated colour near white) is desaturated
+        towards the grey of the same luminance (rgb' = y + s (rgb − y), the largest s ≤ 1
+        that fits), so its luminance y is shown and nothing is clipped.
+        ``"none"``: linear RGB clipped at 1 (as :meth:`to_display_rgb`).
+
+        Returns ``(rgb, stats)``, stats = ``{"clipped_fraction"`` (pixels with a channel
+        clipped, i.e. above 1 + :data:`WHITE_TOLERANCE`), ``"over_white_fraction"`` (pixels with a channel above display white before
+        the operator), ``"desaturated_fraction"``, ``"max_relative_luminance"``,
+        ``"display_white_cd_m2"``, ``"plate_mean_cd_m2"`` (mean displayed luminance on the plate)}."""
+        import colour
+
+        if colourspace not in ("sRGB", "Display P3"):
+            raise InvalidInputError(f"colourspace must be 'sRGB' or 'Display P3', got {colourspace!r}")
+        if tone_map not in ("knee", "none"):
+            raise InvalidInputError(f"tone_map must be 'knee' or 'none', got {tone_map!r}")
+        k = float(check_finite(knee, "knee"))
+        if not 0 < k < 1:
+            raise InvalidInputError(f"knee must lie in (0, 1) (a fraction of display white), got {knee!r}")
+        e = float(check_finite(exposure, "exposure"))
+        if e <= 0:
+            raise InvalidInputError(f"exposure must be > 0, got {exposure!r}")
+        dw = float(check_finite(display_white_cd_m2, "display_white_cd_m2"))
+        if dw <= 0:
+            raise InvalidInputError(f"display_white_cd_m2 must be > 0, got {display_white_cd_m2!r}")
+        white = self.white_xyz
+        xyz = self.to_xyz() / 100.0 * self.exposure_scale(e)
+        xy_w = colour.XYZ_to_xy(white / white[1]) if white[1] > 0 else colour.CCS_ILLUMINANTS[
+            "CIE 1931 2 Degree Standard Observer"]["D65"]
+        space = colour.RGB_COLOURSPACES[colourspace]
+        rgb = np.asarray(colour.XYZ_to_RGB(xyz, space, illuminant=xy_w, chromatic_adaptation_transform="CAT02",
+                                           apply_cctf_encoding=False), float)
+        rgb = np.clip(rgb, 0.0, None)
+        over = np.any(rgb > 1.0 + WHITE_TOLERANCE, axis=-1)
+        x = np.clip(xyz[..., 1], 0.0, None)
+        desat = np.zeros(x.shape, bool)
+        if tone_map == "knee":
+            y = np.where(x > k, k + (1 - k) * (1 - np.exp(-(x - k) / (1 - k))), x)
+            rgb = rgb * np.where(x > 0, y / np.where(x > 0, x, 1.0), 1.0)[..., None]
+            m = rgb.max(axis=-1)
+            desat = m > 1.0 + WHITE_TOLERANCE
+            sc = np.where(desat, (1.0 - y) / np.where(desat, m - y, 1.0), 1.0)[..., None]
+            rgb = np.where(desat[..., None], y[..., None] + sc * (rgb - y[..., None]), rgb)
+        else:
+            y = np.minimum(x, 1.0)
+        clipped = np.any(rgb > 1.0 + WHITE_TOLERANCE, axis=-1)
+        rgb = np.clip(rgb, 0.0, 1.0)
+        on = np.asarray(self.on_plate, bool)
+        stats = {"clipped_fraction": float(clipped.mean()), "over_white_fraction": float(over.mean()),
+                 "desaturated_fraction": float(desat.mean()),
+                 "max_relative_luminance": float(x.max()) if x.size else 0.0, "display_white_cd_m2": dw,
+                 "plate_mean_cd_m2": float(dw * np.minimum(y, 1.0)[on].mean()) if on.any() else 0.0}
+        return np.asarray(space.cctf_encoding(rgb), float), stats
+
     def linear_srgb(self) -> np.ndarray:
         """Linear sRGB (H, W, 3) of XYZ/100 (no exposure, no encoding) — the EXR preview."""
         import colour
 
         return colour.XYZ_to_sRGB(self.to_xyz() / 100.0, apply_cctf_encoding=False)
 
-    def write_png(self, path, exposure: float = 1.0, colourspace: str = "sRGB"):
+    def write_png(self, path, exposure: float = 1.0, colourspace: str = "sRGB", tone_map: str | None = None):
         """8-bit PNG for a display in ``colourspace`` ("sRGB" or "Display P3"; exposure as
-        in :meth:`to_srgb`)."""
+        in :meth:`to_srgb`); ``tone_map`` "knee" or "none" through :meth:`to_display`
+        (default None: clipped, as :meth:`to_display_rgb`)."""
         from pathlib import Path
 
         from PIL import Image
@@ -114,7 +186,9 @@ class SpectralImage:
         from nmmm.atomic_io import atomic_path
 
         p = Path(path)
-        img = Image.fromarray(np.round(self.to_display_rgb(colourspace, exposure) * 255).astype(np.uint8))
+        rgb = (self.to_display_rgb(colourspace, exposure) if tone_map is None
+               else self.to_display(colourspace, exposure, tone_map)[0])
+        img = Image.fromarray(np.round(rgb * 255).astype(np.uint8))
         with atomic_path(p) as tmp:  # a full disk or a crash leaves no truncated PNG under the name
             img.save(tmp, format="PNG")
         return p
