@@ -63,3 +63,28 @@ def test_ellipsometry_csv_writers_are_atomic(tmp_path, monkeypatch):
             write_csv(d, path)
     assert path.read_bytes() == before and len(read_csv(path)) == 2
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.csv"]
+
+
+def test_atomic_outputs_get_the_usual_file_modes(tmp_path):
+    """mkstemp / mkdtemp make 0600 / 0700; an output file gets 0666 & ~umask (or the mode of the file
+    it replaces) and a new output folder 0777 & ~umask, as plain open / mkdir would give."""
+    import os
+    import stat
+
+    from nmmm.atomic_io import atomic_output_dir, atomic_write_text
+
+    old = os.umask(0o022)
+    try:
+        p = atomic_write_text(tmp_path / "report.html", "<html></html>")
+        assert stat.S_IMODE(p.stat().st_mode) == 0o644
+        os.chmod(p, 0o640)
+        atomic_write_text(p, "again")
+        assert stat.S_IMODE(p.stat().st_mode) == 0o640
+        os.umask(0o002)
+        q = atomic_write_text(tmp_path / "table.csv", "a,b\n")
+        assert stat.S_IMODE(q.stat().st_mode) == 0o664
+        with atomic_output_dir(tmp_path / "run") as d:
+            (d / "x.csv").write_text("1\n")
+        assert stat.S_IMODE((tmp_path / "run").stat().st_mode) == 0o775
+    finally:
+        os.umask(old)

@@ -45,6 +45,21 @@ def _write_error(path, exc: OSError) -> DataFileError:
                          "output folder; nothing incomplete was left under that name)")
 
 
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _plain_mode(path: Path, default: int) -> int:
+    """The mode a file or folder written at ``path`` gets: that of the one it replaces, else
+    ``default & ~umask`` (as ``open``/``mkdir`` would give; mkstemp/mkdtemp give 0600/0700)."""
+    try:
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        return default & ~_umask()
+
+
 @contextlib.contextmanager
 def atomic_path(path):
     """Yield a temporary path beside ``path``; it replaces ``path`` when the block succeeds."""
@@ -58,6 +73,8 @@ def atomic_path(path):
     tmp = Path(tmp)
     try:
         yield tmp
+        if tmp.exists():
+            os.chmod(tmp, _plain_mode(p, 0o666))
         os.replace(tmp, p)
     except OSError as exc:
         raise _write_error(p, exc) from None
@@ -159,6 +176,7 @@ def atomic_output_dir(target, lock: bool = True):
             files = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*") if p.is_file())
             (tmp / MANIFEST_NAME).write_text(json.dumps({"files": files}, indent=1), encoding="utf-8")
             if not target.exists():
+                os.chmod(tmp, _plain_mode(target, 0o777))
                 os.replace(tmp, target)
             else:
                 old = _previous_outputs(target)
