@@ -71,16 +71,22 @@ def test_bad_input_names_the_key_and_what_would_be_right():
     raw["pigments"][0]["fraction"] = -0.1
     with pytest.raises(RecipeError, match=r"pigments\[0\]\.fraction: must be in \[0, 1\]"):
         parse_recipe(raw)
-    # a CPVC above the densest packing of spheres (pi/sqrt(18) = 0.7405): film and coat
+    # a CPVC above the densest packing of equal spheres (pi/sqrt(18) = 0.7405): film and coat, refused when the
+    # recipe is read (it was accepted up to 1 and refused only by compute)
     raw = _raw("hematite_tint")
     raw["film"]["cpvc"] = 0.9
-    with pytest.raises(RecipeError, match=r"film: coat 'film': cpvc = 0.9 is not a packing fraction: it must lie in "
-                                          r"\(0, 0.7405\]"):
-        compute(parse_recipe(raw), progress=False)
+    with pytest.raises(RecipeError, match=r"film\.cpvc: .*less than or equal to 0\.7404804"):
+        parse_recipe(raw)
+    raw["film"]["cpvc"] = 0.7404804896930611  # the limit itself is a packing
+    assert parse_recipe(raw).film.cpvc == raw["film"]["cpvc"]
     raw = _raw("three_coat_solid")
     raw["coats"][1]["cpvc"] = 0.8
-    with pytest.raises(RecipeError, match=r"coats\[1\]: coat 'red basecoat': cpvc = 0.8 is not a packing fraction"):
-        compute(parse_recipe(raw), progress=False)
+    with pytest.raises(RecipeError, match=r"coats\[1\]\.cpvc: .*less than or equal to 0\.7404804"):
+        parse_recipe(raw)
+    from nmmm.layers.pigment_mixture import MAX_PACKING, check_cpvc
+
+    raw["coats"][1]["cpvc"] = MAX_PACKING  # the parse limit is the compute limit
+    assert check_cpvc(parse_recipe(raw).coats[1].cpvc, "cpvc") == MAX_PACKING
     # a substrate reflectance outside [0, 1] in the film table
     raw = _raw("hematite_tint")
     raw["film"]["substrate_reflectance"] = -0.1

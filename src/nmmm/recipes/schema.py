@@ -56,21 +56,14 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from nmmm.errors import RecipeError
 
-__all__ = [
-    "Recipe",
-    "load_recipe",
-    "parse_recipe",
-    "example_recipes",
-    "example_path",
-    "set_key",
-    "get_key",
-    "MACRO_OBJECTS",
-    "compound_file",
-    "files_outside_allowed",
-]
+__all__ = ["Recipe", "load_recipe", "parse_recipe", "example_recipes", "example_path", "set_key", "get_key",
+           "MACRO_OBJECTS", "compound_file", "files_outside_allowed"]
 
 #: the tables of which exactly one is the macro object of a recipe
 MACRO_OBJECTS = ("film", "plate", "thin_film", "effect", "coats")
+#: a CPVC is a packing fraction: at most pi/sqrt(18), the densest packing of EQUAL spheres (fcc/hcp; MAX_PACKING of
+#: nmmm.layers.pigment_mixture; random close packing is ~0.64)
+_CPVC = Annotated[float, Field(gt=0.0, le=math.pi / math.sqrt(18.0))]
 
 
 def _fraction(v: float) -> float:
@@ -308,8 +301,8 @@ class Film(_Strict):
     specular: Literal["included", "excluded"] = "excluded"
     #: adding–doubling points per hemisphere; None: chosen for 1e-4 accuracy
     quad_pts: int | None = Field(default=None, ge=4, le=96)
-    #: critical PVC; above it the film holds air voids (default 0.64, random close packing)
-    cpvc: Annotated[float, Field(gt=0.0, lt=1.0)] | None = None
+    #: critical PVC; above it the film holds air voids (default 0.64, random close packing; at most pi/sqrt(18))
+    cpvc: _CPVC | None = None
 
 
 class CoatSpec(_Strict):
@@ -319,7 +312,7 @@ class CoatSpec(_Strict):
     thickness_nm: Positive
     binder: str
     pigments: list[Pigment] = Field(default_factory=list)
-    cpvc: Annotated[float, Field(gt=0.0, lt=1.0)] | None = None
+    cpvc: _CPVC | None = None
 
     @model_validator(mode="after")
     def _sum(self):
