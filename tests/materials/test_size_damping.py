@@ -159,3 +159,14 @@ thickness_nm = [1e5]
     np.testing.assert_allclose(mats["gold"].eps(w), size_damped(get("main/Au/Johnson"), 5.0).eps(w), rtol=1e-13)
     with pytest.raises((RecipeError, ValueError), match="radius_nm"):
         load_recipe(text.replace("radius_nm = 5, A", "radius = 5, A"))
+    # the damping is of the inclusions' spheres: a different radius is refused when the recipe is read
+    with pytest.raises(RecipeError, match=r"levels\[0\]\.inclusions\[0\]\.radius_nm: 20 nm, but compounds\.gold"
+                                          r"\.size_damping\.radius_nm is 5 nm"):
+        load_recipe(text.replace("  radius_nm = 5", "  radius_nm = 20"))
+    # the metal comes from the key (silver's parameters for main/Ag), a contradiction or a dielectric is refused
+    ag = build_materials(load_recipe(text.replace("main/Au/Johnson", "main/Ag/Johnson")))["gold"]
+    np.testing.assert_allclose(ag.eps(w), size_damped(get("main/Ag/Johnson"), 5.0, metal="silver").eps(w), rtol=1e-13)
+    with pytest.raises(RecipeError, match=r"compounds\.gold: .*metal='gold', but the key names silver"):
+        build_materials(load_recipe(text.replace("main/Au/Johnson", "main/Ag/Johnson").replace("A = 1.0", "A = 1.0, metal = 'gold'")))
+    with pytest.raises(RecipeError, match=r"compounds\.gold: .*Re eps = 2\.1.*free-electron metals"):
+        build_materials(load_recipe(text.replace("main/Au/Johnson", "main/SiO2/Malitson")))

@@ -127,11 +127,12 @@ class Spectral(_Strict):
 
 class SizeDamping(_Strict):
     """Surface-scattering damping of a metal compound's free electrons in spheres of radius_nm:
-    gamma(R) = gamma_bulk + A v_F / R (:func:`nmmm.materials.size_damped`; A = 1 classical)."""
+    gamma(R) = gamma_bulk + A v_F / R (:func:`nmmm.materials.size_damped`; A = 1 classical; metal: read from the
+    database key when left out; radius_nm: the inclusions' own radius_nm where a level gives one)."""
 
     radius_nm: Positive
     A: NonNegative = 1.0
-    metal: Literal["gold", "silver"] = "gold"
+    metal: Literal["gold", "silver"] | None = None
 
 
 class Compound(_Strict):
@@ -562,6 +563,11 @@ def _check_references(r: Recipe) -> None:
             if name not in known:
                 raise RecipeError(f"levels[{i}].{key}: unknown compound {name!r}; defined so far: {sorted(known)} "
                                   "(a level may use compounds and the results of earlier levels)")
+        for j, inc in enumerate(lev.inclusions):
+            sd = getattr(r.compounds.get(inc.compound), "size_damping", None)
+            if sd is not None and inc.radius_nm is not None and not math.isclose(sd.radius_nm, inc.radius_nm):
+                raise RecipeError(f"levels[{i}].inclusions[{j}].radius_nm: {inc.radius_nm:g} nm, but compounds.{inc.compound}"
+                                  f".size_damping.radius_nm is {sd.radius_nm:g} nm; the damping is of these spheres: make them equal")
         if lev.name in known:
             raise RecipeError(f"levels[{i}].name: {lev.name!r} is already a compound; give the level's result a new name")
         known.add(lev.name)
