@@ -100,3 +100,27 @@ def test_render_plate_cli_takes_a_recipe(tmp_path):
     assert "Hematite" in info["plate"] and all((tmp_path / f).exists() for f in ("p.exr", "p.png"))
     bad = CliRunner().invoke(render, ["plate", str(tmp_path / "q"), "--paint", str(tmp_path / "missing.toml")])
     assert bad.exit_code == 2 and "missing.toml" in bad.output and "does not exist" in bad.output
+
+
+def test_recipe_image_in_the_viewing_booth():
+    """[image] scene = "booth": the plate among grey walls (no black void), tone-mapped."""
+    from nmmm.recipes.run import compute
+
+    res = compute(_hematite({"stereo": False, "pixels": [36, 24], "scene": "booth", "fov_deg": 40.0}), progress=False)
+    img, simg = res.images["view"], res.spectral_images["view"]
+    off = ~simg.on_plate
+    assert off.any() and np.all(img[off].min(-1) > 0.05)  # the booth's grey behind the plate
+    assert np.all((img >= 0) & (img <= 1)) and simg.to_display(tone_map="knee")[1]["clipped_fraction"] <= 0.01
+
+
+def test_effect_recipe_in_the_booth_has_glints():
+    import tomllib as _t
+
+    from nmmm.recipes.run import compute
+
+    p = example_path("grey_metallic")
+    raw = _t.loads(p.read_text())
+    raw["spectral"]["step_nm"] = 40
+    raw["image"].update({"pixels": [36, 24], "scene": "booth", "stereo": False, "renderer": "auto"})
+    res = compute(parse_recipe(raw, base_dir=p.parent), progress=False)
+    assert res.spectral_images["view"].metadata["n_glints"] > 0 and res.images["view"].shape == (24, 36, 3)

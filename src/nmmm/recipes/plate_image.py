@@ -88,8 +88,15 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
     im = recipe.image
     plate = recipe_painted_plate(recipe, brdf, flakes, im)
     centre = _eye_centre_mm(im)
-    light = PointLight(tuple(np.asarray(im.light_position_cm, float) * 10.0), recipe.lighting.illuminants[0])
-    kw = dict(lights=[light], wavelength_nm=w)
+    if im.scene == "booth":
+        from nmmm.appearance.render import ViewingBooth
+
+        booth = ViewingBooth(source=im.booth_source, wall_reflectance=im.wall_reflectance,
+                             floor_reflectance=im.wall_reflectance, illuminant=recipe.lighting.illuminants[0])
+        kw = dict(booth.scene(plate, w), wavelength_nm=w)
+    else:
+        light = PointLight(tuple(np.asarray(im.light_position_cm, float) * 10.0), recipe.lighting.illuminants[0])
+        kw = dict(lights=[light], wavelength_nm=w)
     if im.stereo:
         left, right = render_stereo_plate(plate, position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0),
                                           interocular_mm=im.eye_separation_cm * 10.0, fov_deg=im.fov_deg,
@@ -100,6 +107,8 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
                             resolution=tuple(im.pixels))
         named = {"view": render_plate(plate, cam, **kw)}
     keep.update(named)
+    if im.scene == "booth":  # a calibrated display: the booth's white tile is white, highlights tone-mapped
+        return {k: v.to_display("sRGB", im.exposure, "knee")[0] for k, v in named.items()}
     return {k: np.asarray(v.to_srgb(im.exposure), float) for k, v in named.items()}
 
 

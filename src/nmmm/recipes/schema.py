@@ -411,6 +411,11 @@ class Image(_Strict):
     flake_diameter_um: Positive = 15.0
     fov_deg: Annotated[float, Field(gt=1.0, lt=120.0)] = 25.0
     seed: int = 0
+    #: "point": the point light at light_position_cm, black around the plate; "booth": a grey
+    #: viewing booth with a 45° (booth_source) D65-type source, tone-mapped (nmmm.appearance.render.ViewingBooth)
+    scene: Literal["point", "booth"] = "point"
+    booth_source: Literal["45", "overhead"] = "45"
+    wall_reflectance: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.2
 
     @model_validator(mode="after")
     def _light_above(self):
