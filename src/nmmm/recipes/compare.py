@@ -92,6 +92,7 @@ def _compare_recipes(path_a, path_b, out_dir, illuminants, progress, folders):
     out = Path(out_dir)
     da, db = folders
     made = not out.exists()
+    had_report = (out / "report.html").is_file() or (out / _COMPARE_MARKER).is_file()
     out.mkdir(parents=True, exist_ok=True)
     try:
         a = run_recipe(path_a, out / da, progress=progress, report=False)
@@ -127,8 +128,42 @@ def _compare_recipes(path_a, path_b, out_dir, illuminants, progress, folders):
                                   f"nmmm compare {_arg(path_a, 'first.toml')} {_arg(path_b, 'second.toml')} "
                                   f"-i D65 -i A -i FL11 -o {out}")])
     report = out / "report.html"
+    _remove_stale_outputs(out, (da, db), figs, had_report)
     return {"rows": rows, "report": str(report), "a": a, "b": b, "section": summary, "names": (na, nb),
             "folders": (str(out / da), str(out / db))}
+
+
+#: written last into a comparison's folder: what this comparison wrote there
+_COMPARE_MARKER = ".nmmm-compare.json"
+#: the figures a comparison may write beside its report
+_COMPARE_FIGURES = ("spectra_overlay.png", "images_side_by_side.png")
+
+
+def _remove_stale_outputs(out: Path, folders, figures, had_report: bool) -> None:
+    """Leave in ``out`` only this comparison: a run folder of an earlier comparison (a sub-folder
+    holding nmmm's run manifest, in a folder that held a comparison report) and its lock file, and
+    an earlier comparison's figure this one did not write, are removed; nothing else is touched
+    (files and folders nmmm did not write stay). Then :data:`_COMPARE_MARKER` lists what is there."""
+    import json
+    import shutil
+
+    from nmmm.atomic_io import MANIFEST_NAME, atomic_write_text
+
+    keep = set(folders)
+    if had_report:
+        for sub in out.iterdir():
+            if sub.name in keep or not sub.is_dir() or sub.is_symlink() or not (sub / MANIFEST_NAME).is_file():
+                continue
+            shutil.rmtree(sub, ignore_errors=True)
+            lock = out / f".{sub.name}.nmmm-lock"
+            if lock.is_file():
+                lock.unlink(missing_ok=True)
+        written = {Path(f).name for f in figures}
+        for name in _COMPARE_FIGURES:
+            if name not in written and (out / name).is_file():
+                (out / name).unlink(missing_ok=True)
+    atomic_write_text(out / _COMPARE_MARKER, json.dumps(
+        {"folders": sorted(keep), "files": ["report.html"] + sorted(Path(f).name for f in figures)}, indent=1))
 
 
 def _remove_if_only_locks(folder: Path) -> None:
@@ -167,10 +202,24 @@ def recipe_folders(name_a: str, name_b: str) -> tuple[str, str]:
     path (``Hematite paint (7 %)`` -> ``Hematite_paint_7``), ``_first``/``_second`` added when equal."""
     import re
 
-    fa, fb = (re.sub(r"[^A-Za-z0-9]+", "_", n).strip("_") or "recipe" for n in (name_a, name_b))
+    fa, fb = (_short(re.sub(r"[^A-Za-z0-9]+", "_", n).strip("_") or "recipe", n) for n in (name_a, name_b))
     if fa.lower() == fb.lower():
         return f"{fa}_first", f"{fb}_second"
     return fa, fb
+
+
+#: longest run-folder name made from a recipe name (file systems allow 255 bytes)
+MAX_FOLDER_NAME = 80
+
+
+def _short(safe: str, name: str) -> str:
+    """``safe`` cut to :data:`MAX_FOLDER_NAME` characters, a short hash of the full ``name`` added
+    when cut (two long names that start alike still get different folders)."""
+    if len(safe) <= MAX_FOLDER_NAME:
+        return safe
+    import hashlib
+
+    return safe[:MAX_FOLDER_NAME - 9].rstrip("_") + "_" + hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
 
 
 def _lab_text(L, a, b) -> str:
