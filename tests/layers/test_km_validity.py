@@ -1,6 +1,7 @@
 """KM/AD disagreement map (issue 24 item 5).
 
-Independent references run here: iadpython (Prahl's adding-doubling) for the opaque AD side,
+Independent references run here: iadpython (Prahl's adding-doubling) for the AD side (opaque, and
+finite over black),
 Kubelka's closed form R_inf = 1 + K/S - sqrt((K/S)^2 + 2 K/S) with Saunderson's correction written
 out for the KM side, and the empty-slab limit.
 """
@@ -37,6 +38,37 @@ def test_empty_slab_and_white_limits():
     # a thin, absorbing, forward-scattering film over black: KM is far off (measured dE00 8-9)
     dark = km_ad_disagreement(0.9, 2.0, 0.6, 1.5)
     assert float(dark.delta_e00) > 5.0 and float(dark.delta_r) > 0
+
+
+def test_finite_dark_case_against_iadpython_and_kubelka():
+    # the thin, absorbing, forward-scattering film over black (tau 2): the AD side from iadpython (a slide of
+    # the slab's index that absorbs everything, b_below = 10, stands for the black substrate: no bottom
+    # interface, nothing returns), the KM side from Kubelka's hyperbolic solution over black,
+    # R = 1 / (a + b coth(b S X)), a = 1 + K/S, b = sqrt(a^2 - 1), with Saunderson's correction; the
+    # lightness difference of the two greys in CIEDE2000 written out (a* = b* = 0)
+    iad = pytest.importorskip("iadpython")
+    a, tau, g, n = 0.9, 2.0, 0.6, 1.5
+    m = km_ad_disagreement(a, tau, g, n)
+    s = iad.Sample(a=a, b=tau, g=g, n=n, n_above=n, n_below=n, quad_pts=32)
+    s.b_below = 10.0
+    k1, k2 = float(saunderson_k1(n)), float(saunderson_k2(n))
+    r_ad = s.rt()[0] - k1  # iadpython's ur1 includes the first-surface reflection k1
+    assert float(m.r_ad) == pytest.approx(r_ad, abs=1e-4)
+    K, S = km_coefficients(1 - a, a, g)
+    aa = 1 + K / S
+    bb = np.sqrt(aa * aa - 1)
+    rb = 1 / (aa + bb / np.tanh(bb * S * tau))
+    r_km = (1 - k1) * (1 - k2) * rb / (1 - k2 * rb)
+    assert float(m.r_km) == pytest.approx(r_km, rel=1e-9)
+
+    def lightness(y):
+        return 116 * np.cbrt(y) - 16 if y > (6 / 29) ** 3 else 116 * (y / (3 * (6 / 29) ** 2) + 4 / 29) - 16
+
+    L1, L2 = lightness(r_km), lightness(r_ad)
+    Lm = (L1 + L2) / 2
+    de00 = abs(L1 - L2) / (1 + 0.015 * (Lm - 50) ** 2 / np.sqrt(20 + (Lm - 50) ** 2))
+    assert de00 > 5.0 and r_km > r_ad  # KM is far off here, by the independent numbers too
+    assert float(m.delta_e00) == pytest.approx(de00, abs=0.02)
 
 
 def test_map_broadcasts_and_figure(tmp_path):
