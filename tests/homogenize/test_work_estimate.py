@@ -56,3 +56,22 @@ def test_cli_limits(tmp_path, capsys):
     assert main(args + ["--max-minutes", "0"]) == 2
     assert "--max-minutes" in capsys.readouterr().err
     assert main(args) == 0
+
+
+def test_recipe_fft_level_refusal_names_the_recipe_keys(monkeypatch):
+    """Inside ``nmmm run`` the refusal names the recipe keys that reduce the work, never options of
+    fft_permittivity or of ``nmmm homogenize run`` that a recipe does not have."""
+    from nmmm.homogenize import work_estimate
+    from nmmm.recipes.run import build_materials
+    from nmmm.recipes.schema import example_path, load_recipe
+    from nmmm.errors import RecipeError
+
+    monkeypatch.setattr(work_estimate, "FFT_MAX_MINUTES", 1e-9)
+    recipe = load_recipe(example_path("hematite_coating_fft"))
+    with pytest.raises(RecipeError) as info:
+        build_materials(recipe)
+    msg = str(info.value)
+    assert "levels[0].microstructure.size_px (now 32" in msg and "levels[0].fft_step_nm" in msg
+    assert "max_minutes=" not in msg and "--single" not in msg and "directions=" not in msg
+    with pytest.raises(InvalidInputError, match=r"max_minutes=.*--single.*directions="):
+        check_fft_work((64, 64, 64))  # without the caller's advice, the function's own

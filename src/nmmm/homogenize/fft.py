@@ -268,6 +268,7 @@ def fft_permittivity(
     progress: bool | None = None,
     max_memory_gb: float | None = None,
     max_minutes: float | None = None,
+    work_advice: str | None = None,
 ) -> FFTHomogenization:
     """Effective permittivity tensor of a periodic voxel microstructure (FFT, quasi-static).
 
@@ -327,6 +328,9 @@ def fft_permittivity(
         (:func:`nmmm.homogenize.work_estimate.check_fft_work`; defaults half the physical memory
         and 30 minutes): beyond them the call is refused with the estimate. ``float('inf')``
         lifts a limit. A solve estimated above a minute shows a progress bar.
+    work_advice : str, optional
+        What the refusal beyond those limits tells the caller's user to change, in the caller's
+        terms (a recipe's keys); default: this function's arguments and the CLI options.
 
     Returns
     -------
@@ -392,7 +396,8 @@ def fft_permittivity(
     from nmmm.homogenize.work_estimate import check_fft_work
 
     work = check_fft_work(arr.shape, n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt,
-                          metal=metal_dielectric(table), max_memory_gb=max_memory_gb, max_minutes=max_minutes)
+                          metal=metal_dielectric(table), max_memory_gb=max_memory_gb, max_minutes=max_minutes,
+                          advice=work_advice)
     spacing = None
     if voxel_nm is not None:
         spacing = np.broadcast_to(np.asarray(voxel_nm, dtype=float), (d,))

@@ -92,10 +92,13 @@ def _duration(seconds: float) -> str:
 
 
 def check_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None = None, dtype="complex128",
-                   metal: bool = False, max_memory_gb: float | None = None, max_minutes: float | None = None) -> dict:
+                   metal: bool = False, max_memory_gb: float | None = None, max_minutes: float | None = None,
+                   advice: str | None = None) -> dict:
     """The estimate of :func:`estimate_fft_work`, or :class:`InvalidInputError` with it when the
     memory exceeds ``max_memory_gb`` (default :data:`FFT_MAX_MEMORY_GB`) or the time
-    ``max_minutes`` (default :data:`FFT_MAX_MINUTES`); ``float('inf')`` lifts a limit."""
+    ``max_minutes`` (default :data:`FFT_MAX_MINUTES`); ``float('inf')`` lifts a limit.
+    ``advice``: what the refusal tells the user to change, in the caller's terms (``nmmm run``:
+    the recipe's keys), instead of this function's arguments and the CLI options."""
     mem_lim = FFT_MAX_MEMORY_GB if max_memory_gb is None else float(max_memory_gb)
     min_lim = FFT_MAX_MINUTES if max_minutes is None else float(max_minutes)
     if not (mem_lim > 0 and min_lim > 0):
@@ -103,16 +106,18 @@ def check_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None = No
     e = estimate_fft_work(shape, n_wavelengths=n_wavelengths, n_loadings=n_loadings, dtype=dtype, metal=metal)
     over = []
     if e["memory_gb"] > mem_lim:
-        over.append(f"memory {e['memory_gb']:.3g} GB > {mem_lim:g} GB (max_memory_gb=, --max-memory-gb)")
+        over.append(f"memory {e['memory_gb']:.3g} GB > {mem_lim:g} GB"
+                    + ("" if advice else " (max_memory_gb=, --max-memory-gb)"))
     if e["seconds"] > 60.0 * min_lim:
-        over.append(f"time ~{_duration(e['seconds'])} > {min_lim:g} min (max_minutes=, --max-minutes)")
+        over.append(f"time ~{_duration(e['seconds'])} > {min_lim:g} min" + ("" if advice else " (max_minutes=, --max-minutes)"))
     if over:
         grid = " x ".join(str(int(s)) for s in shape)
         loadings = len(tuple(shape)) if n_loadings is None else n_loadings
         raise InvalidInputError(
             f"FFT homogenization of a {grid} cell ({e['voxels']:.3g} voxels, {n_wavelengths} wavelength(s) x "
             f"{loadings} loading(s), ~{e['projections']} projections each{' (metal contrast)' if metal else ''}) "
-            f"is refused: {'; '.join(over)}. Use a smaller cell (an RVE study, nmmm.homogenize.resolution, says "
-            "how small is enough), complex64 (dtype='complex64', --single: half the memory), fewer loadings "
-            "(directions=), or raise the limit named")
+            f"is refused: {'; '.join(over)}. " + (advice or (
+                "Use a smaller cell (an RVE study, nmmm.homogenize.resolution, says "
+                "how small is enough), complex64 (dtype='complex64', --single: half the memory), fewer loadings "
+                "(directions=), or raise the limit named")))
     return e

@@ -109,7 +109,7 @@ def _shape(inc):
     return Shape.ellipsoid(*inc.semi_axes_nm)
 
 
-def _fft_level(lev, host, inc_mat, w, progress=None):
+def _fft_level(lev, host, inc_mat, w, progress=None, index: int = 0):
     from nmmm.homogenize import homogenize
     from nmmm.microstructure import boolean_spheres, hardcore_spheres
 
@@ -122,7 +122,11 @@ def _fft_level(lev, host, inc_mat, w, progress=None):
         cell = boolean_spheres(shape, ms.voxel_nm, inc.radius_nm, fraction=inc.fraction, seed=ms.seed)
     lo, hi = float(w[0]), float(w[-1])
     nodes = np.unique(np.r_[np.arange(lo, hi, lev.fft_step_nm), hi])
-    return homogenize(cell, {0: host, 1: inc_mat}, wavelength_nm=nodes, name=lev.name, progress=progress)
+    key = f"levels[{index}]"
+    advice = (f"Lower {key}.microstructure.size_px (now {ms.size_px}; the work grows as its cube in 3-D) or "
+              f"raise {key}.fft_step_nm (now {lev.fft_step_nm:g} nm: {nodes.size} wavelengths solved)")
+    return homogenize(cell, {0: host, 1: inc_mat}, wavelength_nm=nodes, name=lev.name, progress=progress,
+                      work_advice=advice)
 
 
 def build_materials(recipe: Recipe, wavelength_nm=None, progress: bool | None = None) -> dict:
@@ -147,7 +151,7 @@ def build_materials(recipe: Recipe, wavelength_nm=None, progress: bool | None = 
     for i, lev in enumerate(recipe.levels):
         try:
             if lev.method == "fft":
-                mats[lev.name] = _fft_level(lev, mats[lev.host], mats[lev.inclusions[0].compound], w, progress)
+                mats[lev.name] = _fft_level(lev, mats[lev.host], mats[lev.inclusions[0].compound], w, progress, i)
             else:
                 incs = [Inclusion(mats[inc.compound], inc.fraction, _shape(inc), inc.radius_nm) for inc in lev.inclusions]
                 mats[lev.name] = mix(mats[lev.host], incs, method=lev.method, name=lev.name)
