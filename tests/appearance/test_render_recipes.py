@@ -106,7 +106,7 @@ def test_recipe_image_in_the_viewing_booth():
     """[image] scene = "booth": the plate among grey walls (no black void), tone-mapped."""
     from nmmm.recipes.run import compute
 
-    res = compute(_hematite({"stereo": False, "pixels": [36, 24], "scene": "booth", "fov_deg": 40.0}), progress=False)
+    res = compute(_hematite({"stereo": False, "pixels": [36, 24], "scene": "booth-overhead", "fov_deg": 40.0}), progress=False)
     img, simg = res.images["view"], res.spectral_images["view"]
     off = ~simg.on_plate
     assert off.any() and np.all(img[off].min(-1) > 0.05)  # the booth's grey behind the plate

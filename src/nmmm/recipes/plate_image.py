@@ -88,10 +88,10 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
     im = recipe.image
     plate = recipe_painted_plate(recipe, brdf, flakes, im)
     centre = _eye_centre_mm(im)
-    if im.scene == "booth":
+    if im.scene.startswith("booth"):
         from nmmm.appearance.render import ViewingBooth
 
-        booth = ViewingBooth(source=im.booth_source, wall_reflectance=im.wall_reflectance,
+        booth = ViewingBooth(source="overhead" if im.scene == "booth-overhead" else "45", wall_reflectance=im.wall_reflectance,
                              floor_reflectance=im.wall_reflectance, illuminant=recipe.lighting.illuminants[0])
         kw = dict(booth.scene(plate, w), wavelength_nm=w)
     else:
@@ -107,7 +107,7 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
                             resolution=tuple(im.pixels))
         named = {"view": render_plate(plate, cam, **kw)}
     keep.update(named)
-    if im.scene == "booth":  # a calibrated display: the booth's white tile is white, highlights tone-mapped
+    if im.scene.startswith("booth"):  # a calibrated display: the booth's white tile is white, highlights tone-mapped
         return {k: v.to_display("sRGB", im.exposure, "knee")[0] for k, v in named.items()}
     return {k: np.asarray(v.to_srgb(im.exposure), float) for k, v in named.items()}
 

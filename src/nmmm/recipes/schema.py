@@ -411,11 +411,8 @@ class Image(_Strict):
     flake_diameter_um: Positive = 15.0
     fov_deg: Annotated[float, Field(gt=1.0, lt=120.0)] = 25.0
     seed: int = 0
-    #: "point": the point light at light_position_cm, black around the plate; "booth": a grey
-    #: viewing booth with a 45° (booth_source) D65-type source, tone-mapped (nmmm.appearance.render.ViewingBooth)
-    scene: Literal["point", "booth"] = "point"
-    booth_source: Literal["45", "overhead"] = "45"
-    wall_reflectance: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.2
+    scene: Literal["point", "booth", "booth-overhead"] = "point"  # booth: ViewingBooth, 45° or overhead source
+    wall_reflectance: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.2  # of the booth's walls and floor
 
     @model_validator(mode="after")
     def _light_above(self):
@@ -620,9 +617,8 @@ def _check_references(r: Recipe) -> None:
         for j, lay in enumerate(r.thin_film.layers):
             need(f"thin_film.layers[{j}].compound", lay.compound)
     if r.image is not None and r.effect is None and r.film is None and r.coats is None:
-        raise RecipeError(f"image: a plate image needs a paint ([film], [[coats]] or [effect]); a "
-                          f"[{'plate' if r.plate is not None else 'thin_film'}] recipe has no painted surface "
-                          "to render — remove [image]")
+        raise RecipeError(f"image: a plate image needs a paint ([film], [[coats]] or [effect]); a [{r.macro}] recipe "
+                          "has no painted surface to render — remove [image]")
     w0, w1 = r.spectral.start_nm, r.spectral.stop_nm
     if w0 < 360 or w1 > 830:
         raise RecipeError(f"spectral: colours need a grid inside 360–830 nm (the CIE tables); got {w0:g}–{w1:g} nm")
