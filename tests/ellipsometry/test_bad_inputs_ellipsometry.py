@@ -157,3 +157,35 @@ def test_prescan_finds_the_interference_order(thick_film):
 
     t = float(re.search(r"film\.thickness_nm\s*=?\s*([0-9.]+)", r.output).group(1))
     assert t == pytest.approx(1200.0, abs=1.0)
+
+
+def test_prescan_reports_its_real_sampling_and_warns_when_capped():
+    """The pre-scan line gives the sampling the grid really has (not the 8 asked when max_points
+    caps the grid), warns below 2 per interference period, and the coherent-layer warning of
+    Stack.rt (thick layers of the grid) does not leak out of the scan."""
+    import re
+    import tomllib
+
+    from nmmm.ellipsometry.data import EllipsometryData
+    from nmmm.ellipsometry.fit_start import thickness_prescan
+    from nmmm.ellipsometry.model import EllipsometryModel
+
+    wide = MODEL.replace("max = 1400", "max = 4000")  # n d up to ~6400 nm: Stack.rt warns on a 50 nm grid
+    truth = EllipsometryModel.from_dict(tomllib.loads(wide % (1200.0, 1.55)))
+    start = EllipsometryModel.from_dict(tomllib.loads(wide % (1230.0, 1.60)))
+    data = EllipsometryData.from_model(truth.build(), np.arange(300.0, 1001.0, 50.0), [70.0], 0.02, 0.05,
+                                       noise_seed=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _, lines = thickness_prescan(start, data)
+    first = lines[0]
+    per = float(re.search(r"([0-9.]+) per interference period", first).group(1))
+    assert per == pytest.approx(8, rel=0.05)
+    with pytest.warns(UserWarning, match=r"only 0\.[0-9]+ times \(< 2\)") as rec:
+        _, lines = thickness_prescan(start, data, max_points=4)
+    assert not any("is coherent but" in str(r.message) for r in rec)
+    per_capped = float(re.search(r"([0-9.]+) per interference period", lines[0]).group(1))
+    assert per_capped < 2 and "8 per" not in lines[0]
+    # same range, 3 intervals instead of N - 1: the sampling scales with the number of intervals
+    n_full = int(re.search(r"(\d+) thicknesses", first).group(1))
+    assert per_capped == pytest.approx(per * 3 / (n_full - 1), rel=0.02)

@@ -20,6 +20,8 @@ References
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 __all__ = ["thickness_prescan", "check_fit_quality", "MSE_WARN_THRESHOLD", "PRESCAN_MAX_POINTS"]
@@ -76,10 +78,19 @@ def thickness_prescan(model, data, *, points_per_fringe: int = 8, max_points: in
         count = int(min(max_points, max(3, np.ceil((hi - lo) / step) + 1)))
         grid = np.linspace(lo, hi, count)
         start = par.value
-        model, _, chi2 = model.scan(data, par.name, grid, set_best=True)
+        # the grid's real sampling of the narrowest period (coarser than asked once max_points caps it)
+        per = (step * points_per_fringe) / (grid[1] - grid[0])
+        if per < 2:
+            warnings.warn(f"pre-scan {par.name}: the {lo:g}-{hi:g} nm range at {count} points (max_points) samples "
+                          f"an interference period only {per:.3g} times (< 2): the scan can miss the interference "
+                          "order; narrow the thickness bounds or raise max_points", UserWarning, stacklevel=2)
+        with warnings.catch_warnings():
+            # the grid's thickest layers are coherent on purpose here: the scan looks for the order
+            warnings.filterwarnings("ignore", message=r"layer \d+ .* is coherent but its interference fringes")
+            model, _, chi2 = model.scan(data, par.name, grid, set_best=True)
         best = next(p.value for p in model.parameters if p.name == par.name)
         lines.append(f"pre-scan {par.name}: {count} thicknesses {lo:g}-{hi:g} nm (step {grid[1] - grid[0]:.3g} nm, "
-                     f"{points_per_fringe} per interference period): start {start:g} -> {best:g} nm")
+                     f"{per:.3g} per interference period): start {start:g} -> {best:g} nm")
     return model, lines
 
 
