@@ -111,6 +111,20 @@ class _MissingDependency(click.ClickException):
         click.echo(self.format_message(), err=True)
 
 
+class _DataError(click.ClickException):
+    """Bad input (an :class:`~nmmm.errors.NmmmError`): the CLI's one voice, one ``error:`` line on
+    stderr and exit status 2 (as :func:`nmmm.cli.main` gives every data error)."""
+
+    exit_code = 2
+
+    def __init__(self, exc):
+        text = " ".join(str(exc).split()).replace("render_plate(..., max_memory_gb=)", "--max-memory-gb")
+        super().__init__(text)
+
+    def show(self, file=None):
+        click.echo("error: " + self.format_message(), err=True)
+
+
 @click.group(name="render")
 def render():
     """Spectral rendering of painted plates and objects (spectral EXR + sRGB PNG)."""
@@ -161,9 +175,12 @@ def _common(f):
 @click.option("--tone-map", type=click.Choice(("auto", "knee", "none")), default="auto", show_default=True,
               help="PNG highlights above display white: 'knee' compresses them (SpectralImage.to_display), 'none' "
                    "clips; 'auto' is knee in a booth, none otherwise.")
+@click.option("--max-memory-gb", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="Memory limit of one render (default: half the physical memory); a larger render is refused.")
 def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_deg, light_azimuth_deg, irradiance,
               environment, env_radiance, width, height, exposure, colourspace, cells, camera_mm, look_at_mm, fov_deg, stereo,
-              interocular_mm, glint_spread_deg, seed, booth, wall_reflectance, illuminance_lux, tone_map):
+              interocular_mm, glint_spread_deg, seed, booth, wall_reflectance, illuminance_lux, tone_map,
+              max_memory_gb):
     """Render a painted plate to OUTPUT.exr and OUTPUT.png."""
     from nmmm.appearance.render.camera import PinholeCamera
     from nmmm.appearance.render.plate import render_plate, render_stereo_plate
@@ -186,7 +203,8 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
             lights, env = scene["lights"], scene["environment"]
         else:
             lights, env = _lights(light, light_zenith_deg, light_azimuth_deg, irradiance, environment, env_radiance)
-        kw = dict(lights=lights, environment=env, glint_spread_deg=glint_spread_deg, wavelength_nm=grid)
+        kw = dict(lights=lights, environment=env, glint_spread_deg=glint_spread_deg, wavelength_nm=grid,
+                  max_memory_gb=max_memory_gb)
         if stereo:
             imgs = render_stereo_plate(plate, camera_mm, look_at_mm, interocular_mm, fov_deg, (width, height), **kw)
             named = dict(zip(("_left", "_right"), imgs))
@@ -194,7 +212,7 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
             named = {"": render_plate(plate, PinholeCamera(camera_mm, look_at_mm, fov_deg=fov_deg,
                                                            resolution=(width, height)), **kw)}
     except NmmmError as exc:
-        raise click.ClickException(str(exc)) from exc
+        raise _DataError(exc) from None
     files = []
     tm = ("knee" if booth != "none" else None) if tone_map == "auto" else tone_map
     display = {}
@@ -243,7 +261,7 @@ def object_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith
     except MitsubaUnavailableError as exc:  # a missing system library: one line, exit 2
         raise _MissingDependency(f"nmmm render object: {exc}") from None
     except NmmmError as exc:
-        raise click.ClickException(str(exc)) from exc
+        raise _DataError(exc) from None
     named = dict(zip(("_left", "_right"), imgs)) if stereo else {"": imgs[0]}
     files = []
     for suffix, img in named.items():
