@@ -89,17 +89,13 @@ def test_stats_alpha_out_of_range_names_alpha_and_its_range():
 
 
 def test_plate_render_too_large_is_refused_with_its_estimate():
-    import time
-
     from nmmm.appearance.render import DirectionalLight, LambertianBRDF, PaintedPlate, PinholeCamera, render_plate
 
     plate = PaintedPlate(LambertianBRDF(0.5), size_mm=(150, 100))
     light = DirectionalLight.from_angles(0.0, 0.0, "D65", 1.0)
     cam = PinholeCamera((0, -100, 400), (0, 0, 0), fov_deg=20, resolution=(200_000, 133_333))
-    t = time.perf_counter()
     with pytest.raises(InvalidInputError, match=r"200000 x 133333 render at \d+ wavelengths needs about .* GB.*max_memory_gb"):
         render_plate(plate, cam, light)
-    assert time.perf_counter() - t < 5
     small = PinholeCamera((0, -100, 400), (0, 0, 0), fov_deg=20, resolution=(64, 43))
     with pytest.raises(InvalidInputError, match="above the 1e-05 GB limit"):
         render_plate(plate, small, light, max_memory_gb=1e-5)

@@ -18,7 +18,6 @@ import contextlib
 import io
 import random
 import signal
-import time
 from pathlib import Path
 
 import numpy as np
@@ -35,8 +34,8 @@ NASTY_BYTES = [b"\x00", b"\xff\xfe", b"\xef\xbb\xbf", b"\r", b"\t", b"\x1b[31m",
                b"\n\n", b";", b",,,", b"#", b"'", b'"', b"[", b"]", b"=", b"{{"]
 
 
-class Hang(Exception):
-    pass
+class Hang(BaseException):
+    """The alarm: a BaseException, so no ``except Exception`` in the code under test swallows it."""
 
 
 @contextlib.contextmanager
@@ -91,14 +90,32 @@ def mutate_text(rng: random.Random, text: str) -> bytes:
     return data
 
 
+#: stdout of the latest :func:`run_cli` call (for the checks of a command that exited 0)
+LAST_STDOUT = [""]
+
+
 def run_cli(argv):
-    """(exit status, stderr lines) of ``nmmm argv`` in-process; raises what escapes main."""
+    """(exit status, stderr lines) of ``nmmm argv`` in-process; raises what escapes main. Its stdout
+    is kept in ``LAST_STDOUT[0]``."""
     from nmmm.cli import main
 
     err, out = io.StringIO(), io.StringIO()
     with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out), alarm(CASE_SECONDS):
         rc = main([str(a) for a in argv])
+    LAST_STDOUT[0] = out.getvalue()
     return rc, [ln for ln in err.getvalue().splitlines() if ln.strip()]
+
+
+def assert_shown_nk_physical(case, stdout):
+    """``materials show`` that exited 0 printed a finite table with n > 0 and k >= 0."""
+    import re
+
+    rows = [ln.split() for ln in stdout.splitlines() if re.match(r"^\s+[-+0-9.]+\s+[-+0-9.naif]+\s+[-+0-9.naif]+\s*$", ln)]
+    assert rows, f"{case}: exit 0 but no n, k table in {stdout[:300]!r}"
+    vals = np.array([[float(x) for x in r] for r in rows])
+    assert np.isfinite(vals).all(), f"{case}: non-finite values shown: {rows[:5]}"
+    assert (vals[:, 0] > 0).all() and (vals[:, 1] > 0).all() and (vals[:, 2] >= 0).all(), \
+        f"{case}: unphysical wavelength, n or k shown: {rows[:5]}"
 
 
 def assert_clean(case, rc, err, no_match_ok=False):
@@ -146,7 +163,6 @@ def test_fuzz_recipes_load_or_refuse_cleanly():
     assert texts, f"no shipped recipes under {EXAMPLES}"
     sources = [p.read_text(encoding="utf-8") for p in texts]
     kinds = {"ok": 0, "error": 0}
-    t0 = time.perf_counter()
     for n in range(150):
         data = mutate_text(rng, rng.choice(sources))
         try:
@@ -173,7 +189,6 @@ def test_fuzz_recipes_load_or_refuse_cleanly():
         except Exception as exc:  # noqa: BLE001 - that is what the test is for
             pytest.fail(f"recipe case {n}: {type(exc).__name__}: {exc} for {data[:300]!r}")
     assert kinds["error"] > 30 and kinds["ok"] > 10, kinds  # the generator does make bad and good inputs
-    assert time.perf_counter() - t0 < 30
 
 
 @pytest.mark.parametrize("kind", ["material_csv", "material_yaml", "woollam", "ellipsometry_csv"])
@@ -199,6 +214,8 @@ def test_fuzz_data_files_through_the_cli(tmp_path, kind):
         except BaseException as exc:  # noqa: BLE001
             pytest.fail(f"{case}: {type(exc).__name__} escaped the CLI: {exc}")
         assert_clean(case, rc, err)
+        if rc == 0 and argv[0] == "materials":
+            assert_shown_nk_physical(case, LAST_STDOUT[0])
         codes[rc] += 1
     assert codes[2] > 5, codes
 
@@ -231,7 +248,6 @@ def _cli_arg_cases(rng: random.Random, tmp_path: Path):
 
 def test_fuzz_cli_arguments(tmp_path):
     rng = random.Random(f"{SEED}-args")
-    t0 = time.perf_counter()
     codes = {0: 0, 2: 0}
     for n in range(120):
         argv = _cli_arg_cases(rng, tmp_path)
@@ -243,9 +259,10 @@ def test_fuzz_cli_arguments(tmp_path):
         except BaseException as exc:  # noqa: BLE001
             pytest.fail(f"{case}: {type(exc).__name__} escaped the CLI: {exc}")
         assert_clean(case, rc, err, no_match_ok=argv[:2] == ["materials", "search"])
+        if rc == 0 and argv[:2] == ["materials", "show"]:
+            assert_shown_nk_physical(case, LAST_STDOUT[0])
         codes[rc] = codes.get(rc, 0) + 1
     assert codes[2] > 20 and codes[0] > 3, codes
-    assert time.perf_counter() - t0 < 40
 
 
 def test_found_by_the_fuzzer_yaml_row_cut_off(tmp_path):
