@@ -140,3 +140,62 @@ def test_csv_several_samples(tmp_path):
         read_spectra_csv(_write(tmp_path, "t.csv", "wavelength_nm,a,b\n400,0.1,0.1\n500,0.2\n600,0.3,0.3\n"))
     assert read_measured(p).names == s.names
     assert read_measured(_write(tmp_path, "c.cgats", CGATS)).names == ("red panel", "white tile")
+
+
+def _cxf_with_geometry(geometry_xml: str, objects=(("panel", "CS1"),)) -> str:
+    """A CxF3 file with one ColorSpecification whose GeometryChoice is ``geometry_xml``."""
+    values = "0.10 0.11 0.12 0.13"
+    objs = "".join(f'<cc:Object ObjectType="Standard" Name="{n}" Id="{i}"><cc:CreationDate>2026-01-01T00:00:00Z'
+                   f'</cc:CreationDate><cc:ColorValues><cc:ReflectanceSpectrum ColorSpecification="{cs}" StartWL="400">'
+                   f'{values}</cc:ReflectanceSpectrum></cc:ColorValues></cc:Object>' for i, (n, cs) in enumerate(objects, 1))
+    return ('<?xml version="1.0" encoding="UTF-8"?><cc:CxF xmlns:cc="http://colorexchangeformat.com/CxF3-core">'
+            f'<cc:Resources><cc:ObjectCollection>{objs}</cc:ObjectCollection><cc:ColorSpecificationCollection>'
+            '<cc:ColorSpecification Id="CS1"><cc:MeasurementSpec><cc:MeasurementType>Spectrum_Reflectance'
+            f'</cc:MeasurementType><cc:GeometryChoice>{geometry_xml}</cc:GeometryChoice>'
+            '<cc:WavelengthRange StartWL="400" Increment="10"/></cc:MeasurementSpec></cc:ColorSpecification>'
+            '</cc:ColorSpecificationCollection></cc:Resources></cc:CxF>')
+
+
+@pytest.mark.parametrize("xml, geometry", [
+    ("<cc:SphereGeometry>Specular_Included</cc:SphereGeometry>", "di:8"),
+    ("<cc:SphereGeometry>Specular_Excluded</cc:SphereGeometry>", "de:8"),
+    ("<cc:SingleAngle><cc:SingleAngleConfiguration>Annular</cc:SingleAngleConfiguration><cc:IlluminationAngle>45"
+     "</cc:IlluminationAngle><cc:MeasurementAngle>0</cc:MeasurementAngle></cc:SingleAngle>", "45a:0"),
+    ("<cc:SingleAngle><cc:SingleAngleConfiguration>Annular</cc:SingleAngleConfiguration><cc:IlluminationAngle>0"
+     "</cc:IlluminationAngle><cc:MeasurementAngle>45</cc:MeasurementAngle></cc:SingleAngle>", "0:45a"),
+    ("<cc:SingleAngle><cc:SingleAngleConfiguration>Uniplanar</cc:SingleAngleConfiguration><cc:IlluminationAngle>45"
+     "</cc:IlluminationAngle><cc:MeasurementAngle>0</cc:MeasurementAngle></cc:SingleAngle>", "45:0"),
+    ("<cc:MultiAngle><cc:BRDFAngle><cc:IlluminationAngle>45</cc:IlluminationAngle><cc:Aspecular>15</cc:Aspecular>"
+     "<cc:Notation>45as15</cc:Notation></cc:BRDFAngle></cc:MultiAngle>", "45as15"),
+    ("<cc:UnknownGeometry>d:8 (instrument X)</cc:UnknownGeometry>", "d:8 (instrument X)"),
+])
+def test_cxf_geometry_choice_of_the_cxf3_core_schema(tmp_path, xml, geometry):
+    p = _write(tmp_path, "g.cxf", _cxf_with_geometry(xml))
+    assert cxf_geometries(p) == [geometry]
+    assert read_cxf(p).geometry == geometry
+    with pytest.raises(DataFileError, match="emissive"):
+        read_cxf(_write(tmp_path, "e.cxf", _cxf_with_geometry("<cc:EmissiveMode>Ambient</cc:EmissiveMode>")))
+
+
+def test_cxf_sci_and_sce_of_one_panel_are_two_geometries(tmp_path):
+    """Reviewer's file: one object with a Specular_Included and a Specular_Excluded spectrum. Before,
+    both were 'no geometry' and the SCI reading was silently taken; now a geometry must be chosen."""
+    text = _cxf_with_geometry("<cc:SphereGeometry>Specular_Included</cc:SphereGeometry>")
+    sce = text.replace('Id="CS1"', 'Id="CS2"').split("<cc:ColorSpecification ")[1].split("</cc:ColorSpecificationCollection>")[0]
+    text = text.replace("</cc:ColorSpecificationCollection>", "<cc:ColorSpecification " + sce.replace(
+        "Specular_Included", "Specular_Excluded") + "</cc:ColorSpecificationCollection>")
+    text = text.replace("</cc:ReflectanceSpectrum>", '</cc:ReflectanceSpectrum><cc:ReflectanceSpectrum '
+                        'ColorSpecification="CS2" StartWL="400">0.06 0.07 0.08 0.09</cc:ReflectanceSpectrum>')
+    p = _write(tmp_path, "sci_sce.cxf", text)
+    assert cxf_geometries(p) == ["di:8", "de:8"]
+    with pytest.raises(DataFileError, match="2 geometries"):
+        read_cxf(p)
+    np.testing.assert_allclose(read_cxf(p, geometry="de:8").reflectance[0], [0.06, 0.07, 0.08, 0.09])
+    np.testing.assert_allclose(read_cxf(p, geometry="di:8").reflectance[0], [0.10, 0.11, 0.12, 0.13])
+
+
+def test_cxf_duplicate_sample_names_within_one_geometry_refused(tmp_path):
+    text = _cxf_with_geometry("<cc:SphereGeometry>Specular_Included</cc:SphereGeometry>",
+                              objects=(("panel", "CS1"), ("panel", "CS1")))
+    with pytest.raises(DataFileError, match=r"\['panel'\] appear more than once at geometry 'di:8'"):
+        read_cxf(_write(tmp_path, "dup.cxf", text))

@@ -7,7 +7,8 @@
   ``MEASUREMENT_GEOMETRY``.
 - :func:`read_cxf`, :func:`write_cxf`, :func:`cxf_geometries` — CxF3 (ISO 17972-1): each
   ``Object``'s ``ReflectanceSpectrum`` with its ``ColorSpecification`` (wavelength start and
-  increment, geometry from ``SingleAngle`` illumination/measurement angles or ``Geometry`` text);
+  increment, geometry from CxF3-core's GeometryChoice: SphereGeometry ``di:8``/``de:8``, SingleAngle
+  ``45:0``/``45a:0``, MultiAngle, UnknownGeometry);
   a multi-angle file holds one specification per angle, and one geometry is read at a time.
 - :func:`read_spectra_csv` — ``wavelength_nm,<sample>,<sample>…`` (a column per sample).
 - :func:`read_measured` — any of them by the file's suffix.
@@ -229,12 +230,64 @@ def _find(el, name):
     return next((c for c in el.iter() if _local(c.tag) == name), None)
 
 
-def _geometry_of_spec(spec) -> str | None:
+_SPHERE_GEOMETRY = {"Specular_Included": "di:8", "Specular_Excluded": "de:8", "Diffuse": "d:d"}
+
+
+def _angle(el, name, where):
+    a = _find(el, name)
+    try:
+        return float(a.text)
+    except (AttributeError, TypeError, ValueError):
+        raise DataFileError(f"{where}: <{_local(el.tag)}> without a numeric <{name}>") from None
+
+
+def _geometry_of_spec(spec, where: str = "CxF3") -> str | None:
+    """The geometry of one ``ColorSpecification`` as nmmm writes it: CxF3-core's GeometryChoice is
+    EmissiveMode | SphereGeometry (``Specular_Included`` -> ``"di:8"``, ``Specular_Excluded`` ->
+    ``"de:8"``) | SingleAngle (``"45:0"``; ``"45a:0"`` / ``"0:45a"`` when its
+    SingleAngleConfiguration is Annular) | UnknownGeometry (its text) | MultiAngle (each BRDFAngle's
+    Notation, or ``"45as15"``). A non-standard ``<Geometry>`` text (older nmmm files) is read too."""
+    gc = _find(spec, "GeometryChoice")
+    if gc is not None:
+        kids = list(gc)
+        if not kids:
+            raise DataFileError(f"{where}: an empty <GeometryChoice>; CxF3-core needs SphereGeometry, SingleAngle, "
+                                "MultiAngle, UnknownGeometry or EmissiveMode")
+        el, kind = kids[0], _local(kids[0].tag)
+        if kind == "SphereGeometry":
+            text = (el.text or "").strip()
+            if text not in _SPHERE_GEOMETRY:
+                raise DataFileError(f"{where}: SphereGeometry {text!r}; CxF3-core allows {list(_SPHERE_GEOMETRY)}")
+            return _SPHERE_GEOMETRY[text]
+        if kind == "SingleAngle":
+            ill, meas = _angle(el, "IlluminationAngle", where), _angle(el, "MeasurementAngle", where)
+            conf = _find(el, "SingleAngleConfiguration")
+            annular = conf is not None and (conf.text or "").strip() == "Annular"
+            a_ill = "a" if annular and ill != 0 else ""
+            a_meas = "a" if annular and ill == 0 and meas != 0 else ""
+            return f"{ill:g}{a_ill}:{meas:g}{a_meas}"
+        if kind == "MultiAngle":
+            angles = [c for c in el if _local(c.tag) == "BRDFAngle"]
+            names = []
+            for b in angles:
+                note = _find(b, "Notation")
+                if note is not None and (note.text or "").strip():
+                    names.append(note.text.strip())
+                else:
+                    names.append(f"{_angle(b, 'IlluminationAngle', where):g}as{_angle(b, 'Aspecular', where):g}")
+            if len(names) != 1:
+                raise DataFileError(f"{where}: a MultiAngle specification with {len(names)} BRDFAngles {names}; nmmm reads "
+                                    "one ColorSpecification per angle (as X-Rite's multi-angle exports write them)")
+            return names[0]
+        if kind == "UnknownGeometry":
+            return (el.text or "").strip() or None
+        if kind == "EmissiveMode":
+            raise DataFileError(f"{where}: an emissive measurement (EmissiveMode), not a reflectance geometry")
+        raise DataFileError(f"{where}: <{kind}> in GeometryChoice; CxF3-core allows SphereGeometry, SingleAngle, "
+                            "MultiAngle, UnknownGeometry or EmissiveMode")
     single = _find(spec, "SingleAngle")
     if single is not None:
-        ill, meas = _find(single, "IlluminationAngle"), _find(single, "MeasurementAngle")
-        if ill is not None and meas is not None:
-            return f"{float(ill.text):g}:{float(meas.text):g}"
+        return f"{_angle(single, 'IlluminationAngle', where):g}:{_angle(single, 'MeasurementAngle', where):g}"
     g = _find(spec, "Geometry")
     if g is not None and (g.text or "").strip():
         return g.text.strip()
@@ -252,7 +305,7 @@ def _cxf_tree(p: Path):
     for s in root.iter():
         if _local(s.tag) == "ColorSpecification":
             wr = _find(s, "WavelengthRange")
-            specs[s.get("Id")] = dict(geometry=_geometry_of_spec(s),
+            specs[s.get("Id")] = dict(geometry=_geometry_of_spec(s, f"{p.name}: ColorSpecification {s.get('Id')!r}"),
                                       start=float(wr.get("StartWL")) if wr is not None and wr.get("StartWL") else None,
                                       increment=float(wr.get("Increment")) if wr is not None and wr.get("Increment") else None)
     return root, specs
@@ -307,6 +360,12 @@ def read_cxf(path, geometry: str | None = None, unit: str = "auto") -> MeasuredS
     chosen = [s for s in samples if s[1] == want]
     if not chosen:
         raise DataFileError(f"{p.name}: no spectra at geometry {geometry!r}; the file has {geos}")
+    names = [n for n, *_ in chosen]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise DataFileError(f"{p.name}: sample name(s) {twice} appear more than once at geometry {want!r}; within one "
+                            "geometry each object needs its own name (two spectra of one object need two "
+                            "ColorSpecifications, e.g. SphereGeometry Specular_Included and Specular_Excluded)")
     w = chosen[0][2]
     for name, _, wi, _ in chosen:
         if wi.size != w.size or not np.allclose(wi, w):
