@@ -199,3 +199,11 @@ def test_cxf_duplicate_sample_names_within_one_geometry_refused(tmp_path):
                               objects=(("panel", "CS1"), ("panel", "CS1")))
     with pytest.raises(DataFileError, match=r"\['panel'\] appear more than once at geometry 'di:8'"):
         read_cxf(_write(tmp_path, "dup.cxf", text))
+
+
+def test_cxf_without_increment_is_an_error_naming_the_object(tmp_path):
+    """Before, a missing Increment was silently taken as 10 nm."""
+    text = _cxf_with_geometry("<cc:SphereGeometry>Specular_Included</cc:SphereGeometry>",
+                              objects=(("red panel", "CS1"),)).replace(' Increment="10"', "")
+    with pytest.raises(DataFileError, match=r"object 'red panel': no wavelength Increment"):
+        read_cxf(_write(tmp_path, "noinc.cxf", text))

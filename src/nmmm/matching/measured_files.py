@@ -322,9 +322,14 @@ def _cxf_samples(p: Path):
                 continue
             sp = specs.get(rs.get("ColorSpecification"), {})
             start = rs.get("StartWL") or sp.get("start")
-            inc = rs.get("Increment") or sp.get("increment") or 10.0
+            inc = rs.get("Increment") or sp.get("increment")
             if start is None:
                 raise DataFileError(f"{p.name}: object {obj.get('Name')!r}: a ReflectanceSpectrum without StartWL")
+            if inc is None:
+                raise DataFileError(f"{p.name}: object {obj.get('Name')!r}: no wavelength Increment — neither the "
+                                    f"ReflectanceSpectrum nor its ColorSpecification {rs.get('ColorSpecification')!r} "
+                                    "has <WavelengthRange StartWL=... Increment=...> (CxF3-core requires it); add it, "
+                                    "nmmm does not guess the spacing")
             try:
                 v = np.array([float(x) for x in (rs.text or "").split()])
             except ValueError:
