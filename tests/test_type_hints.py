@@ -12,8 +12,6 @@ import pytest
 PACKAGES = ["nmmm.spectra", "nmmm.colour", "nmmm.materials", "nmmm.ema", "nmmm.layers"]
 
 NOT_YET_ANNOTATED = {
-    "nmmm.ema.bruggeman",  # TODO(N): nmmm/ema/bruggeman_rule.py
-    "nmmm.ema.bruggeman_residual",  # TODO(N): nmmm/ema/bruggeman_rule.py
 }
 
 

@@ -44,11 +44,14 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numba
 import numpy as np
+from numpy.typing import ArrayLike
 
 from nmmm.ema._validation import as_eps, as_fraction, as_host_eps, broadcast_inputs, passive
+from nmmm.ema.shapes import Shape
 from nmmm.errors import InvalidInputError
 
 #: Relative loss added to every phase to select the physical root.
@@ -309,7 +312,8 @@ def _groups(n, shapes):
     return np.array(phase, dtype=np.int64), np.array(L), np.array(mult)
 
 
-def bruggeman_residual(eps_effective, eps_phases, fractions, shapes=None) -> np.ndarray:
+def bruggeman_residual(eps_effective: ArrayLike, eps_phases: ArrayLike, fractions: ArrayLike,
+                       shapes: Sequence[Shape | None] | None = None) -> np.ndarray:
     """``Σ_i f_i <(eps_i − eps) / (eps + L_ij (eps_i − eps))>_j / 3`` — zero for a Bruggeman
     solution (spheres: ``Σ_i f_i (eps_i − eps) / (eps_i + 2 eps)``)."""
     e, f = _phases(eps_phases, fractions)
@@ -322,7 +326,8 @@ def bruggeman_residual(eps_effective, eps_phases, fractions, shapes=None) -> np.
     return total
 
 
-def bruggeman(eps_phases, fractions, fraction=None, shapes=None) -> np.ndarray:
+def bruggeman(eps_phases: ArrayLike, fractions: ArrayLike | None, fraction: ArrayLike | None = None,
+               shapes: Sequence[Shape | None] | None = None) -> np.ndarray:
     """Bruggeman symmetric effective permittivity of grains of n phases.
 
     Solves ``Σ_i f_i (eps_i − eps) / (eps_i + 2 eps) = 0`` (spherical grains) for the
