@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+import warnings
 
 import click
 
@@ -81,6 +82,8 @@ def cli():
 
 #: the prefix of every one-line usage or data error of the ``nmmm`` command
 ERROR_PREFIX = "error: "
+#: the prefix of every warning the ``nmmm`` command prints
+WARNING_PREFIX = "warning: "
 
 
 def _one_line(text: str) -> str:
@@ -100,7 +103,19 @@ def main(argv=None):
     and exit with status 2. A failure of the system rather than of the input (a full disk, an
     unreadable folder, too little memory) prints one ``error:`` line too and exits with 1. A
     command's own failure status (``nmmm demo`` with a failed section) keeps its exit 1.
+    A warning is one line ``warning: <message>`` on stderr (not Python's file, line and source).
     """
+    with warnings.catch_warnings():  # the hook is restored when the command ends
+        warnings.showwarning = _show_warning
+        return _main(argv)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """``warnings.showwarning`` of the command line: one ``warning:`` line on stderr."""
+    click.echo(WARNING_PREFIX + _one_line(message), err=True)
+
+
+def _main(argv):
     try:
         cli.main(args=argv, standalone_mode=False)
     except click.exceptions.Abort:

@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -250,7 +252,15 @@ def _thin_film(recipe, mats, w, res):
     med = (lambda n: 1.0 if n is None else mats[n])
     stack = Stack([Layer(mats[l.compound], l.thickness_nm, coherent=l.coherent) for l in tf.layers],
                   ambient=med(tf.ambient), substrate=med(tf.substrate))
-    R = np.asarray(stack.rt(w, np.asarray(tf.angles_deg, float)).R).reshape(w.size, len(tf.angles_deg))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        R = np.asarray(stack.rt(w, np.asarray(tf.angles_deg, float)).R).reshape(w.size, len(tf.angles_deg))
+    for c in caught:  # Stack's advice in the recipe's terms: the key that makes a layer incoherent
+        text = str(c.message)
+        m = re.match(r"layer (\d+) .* is coherent but .*; a layer this thick should be incoherent", text)
+        if m:
+            text = text[:m.end()] + f": set thin_film.layers[{m.group(1)}].coherent = false in the recipe"
+        warnings.warn(text, c.category, stacklevel=2)
     for j, a in enumerate(tf.angles_deg):
         label = f"reflectance ({a:g}° incidence)"
         res.spectra[label] = R[:, j]
