@@ -91,21 +91,70 @@ def test_cxf_multi_angle_round_trip_and_geometry_choice(tmp_path):
         read_cxf(p, geometry="45:110")
 
 
+# The first two objects (of 144) of colour-cxf 0.1.1's own test file, colour_cxf/tests/resources/sample.cxf
+# (X-Rite ColorPort "correctionset1", 2007; BSD-3-Clause), verbatim but for tabs -> two spaces; it is valid
+# CxF3-core (SingleAngle Annular 45/0, 380 nm + 31 x 10 nm).
 CXF_SPEC_EXAMPLE = """<?xml version="1.0" encoding="UTF-8"?>
-<cc:CxF xmlns:cc="http://colorexchangeformat.com/CxF3-core">
+<cc:CxF xmlns:cc="http://colorexchangeformat.com/CxF3-core" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance">
+  <cc:FileInformation>
+    <cc:Creator>X-Rite, Inc.</cc:Creator>
+    <cc:CreationDate>2007-06-14T00:00:00-08:00</cc:CreationDate>
+    <cc:Description>ColorPort Custom Target: correctionset1</cc:Description>
+    <cc:Tag Name="28178_TargetType" Value="CGATS.17"/>
+  </cc:FileInformation>
   <cc:Resources>
     <cc:ObjectCollection>
-      <cc:Object ObjectType="Target" Name="Sample" Id="1">
+      <cc:Object ObjectType="Target" Name="1" Id="1">
+        <cc:CreationDate>2007-06-14T00:00:00-08:00</cc:CreationDate>
         <cc:ColorValues>
-          <cc:ReflectanceSpectrum ColorSpecification="CS1" StartWL="400">0.1 0.2 0.3 0.4</cc:ReflectanceSpectrum>
+          <cc:ColorCIELab ColorSpecification="CS1">
+            <cc:L>17.64167</cc:L>
+            <cc:A>1.076669</cc:A>
+            <cc:B>0.3338588</cc:B>
+          </cc:ColorCIELab>
+          <cc:ColorSRGB ColorSpecification="CS1">
+
+            <cc:R>0</cc:R>
+            <cc:G>0</cc:G>
+            <cc:B>0</cc:B>
+          </cc:ColorSRGB>
+          <cc:ReflectanceSpectrum StartWL="380" ColorSpecification="CS1">0.0179408 0.0189865 0.0196141 0.0201604 0.0208783 0.0202765 0.0213902 0.0232448 0.0251621 0.0264493 0.0270566 0.0270034 0.026543 0.0255919 0.0244324 0.0238113 0.023676 0.0232761 0.0225849 0.0227898 0.0235763 0.0242324 0.0245493 0.024855 0.0254194 0.026301 0.0278601 0.0301097 0.0334874 0.0381948 0.0448929</cc:ReflectanceSpectrum>
+        </cc:ColorValues>
+      </cc:Object>
+      <cc:Object ObjectType="Target" Name="2" Id="2">
+        <cc:CreationDate>2007-06-14T00:00:00-08:00</cc:CreationDate>
+        <cc:ColorValues>
+          <cc:ColorCIELab ColorSpecification="CS1">
+            <cc:L>47.83558</cc:L>
+            <cc:A>63.29078</cc:A>
+            <cc:B>36.27213</cc:B>
+          </cc:ColorCIELab>
+          <cc:ColorSRGB ColorSpecification="CS1">
+            <cc:R>255</cc:R>
+            <cc:G>0</cc:G>
+            <cc:B>0</cc:B>
+          </cc:ColorSRGB>
+          <cc:ReflectanceSpectrum StartWL="380" ColorSpecification="CS1">0.0394959 0.041798 0.0431796 0.0443822 0.0390338 0.0363864 0.0401547 0.045801 0.0523042 0.0586208 0.0632642 0.0662882 0.0659939 0.0596725 0.0527806 0.0512717 0.0512901 0.0460535 0.040967 0.0456935 0.072808 0.1577058 0.3328304 0.5322706 0.6631728 0.735719 0.7882051 0.8269124 0.8502781 0.8555662 0.8545514</cc:ReflectanceSpectrum>
         </cc:ColorValues>
       </cc:Object>
     </cc:ObjectCollection>
     <cc:ColorSpecificationCollection>
       <cc:ColorSpecification Id="CS1">
+        <cc:TristimulusSpec>
+          <cc:Illuminant>D50</cc:Illuminant>
+          <cc:Observer>2_Degree</cc:Observer>
+          <cc:Method>E308_Table5</cc:Method>
+        </cc:TristimulusSpec>
         <cc:MeasurementSpec>
           <cc:MeasurementType>Spectrum_Reflectance</cc:MeasurementType>
-          <cc:WavelengthRange StartWL="400" Increment="10"/>
+          <cc:GeometryChoice>
+            <cc:SingleAngle>
+                                <cc:SingleAngleConfiguration>Annular</cc:SingleAngleConfiguration>
+              <cc:IlluminationAngle>45.0</cc:IlluminationAngle>
+              <cc:MeasurementAngle>0.0</cc:MeasurementAngle>
+            </cc:SingleAngle>
+          </cc:GeometryChoice>
+          <cc:WavelengthRange StartWL="380" Increment="10"/>
         </cc:MeasurementSpec>
       </cc:ColorSpecification>
     </cc:ColorSpecificationCollection>
@@ -116,8 +165,10 @@ CXF_SPEC_EXAMPLE = """<?xml version="1.0" encoding="UTF-8"?>
 
 def test_cxf_in_the_specifications_layout(tmp_path):
     s = read_cxf(_write(tmp_path, "spec.cxf", CXF_SPEC_EXAMPLE))
-    np.testing.assert_array_equal(s.wavelength_nm, [400, 410, 420, 430])
-    np.testing.assert_allclose(s.reflectance[0], [0.1, 0.2, 0.3, 0.4])
+    np.testing.assert_array_equal(s.wavelength_nm, np.arange(380.0, 681.0, 10.0))
+    assert s.names == ("1", "2") and s.geometry == "45a:0"
+    np.testing.assert_allclose(s.reflectance[0, :3], [0.0179408, 0.0189865, 0.0196141])
+    np.testing.assert_allclose(s.reflectance[1, -1], 0.8545514)
 
 
 def test_cxf_truncated_and_empty(tmp_path):

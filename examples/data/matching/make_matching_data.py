@@ -31,7 +31,8 @@ def main():
         spectra.append(np.clip(s.reflectance(1.25, 1.15) + rng.normal(0, 0.002, 16), 0, 1))
     write_cgats(HERE / "ladder.cgats", MeasuredSpectra(s.w, np.stack(spectra), tuple(names), "de:8"), originator="synthetic (nmmm)")
     m = RecipeModel(HERE / "tint_base.toml", ["pigments.0.fraction=0.005:0.08"])
-    write_cxf(HERE / "batch.cxf", MeasuredSpectra(m.wavelength_nm, m.reflectance([0.021])[None], ("batch 7",), "de:8"))
+    write_cxf(HERE / "batch.cxf", MeasuredSpectra(m.wavelength_nm, m.reflectance([0.021])[None], ("batch 7",), "de:8"),
+              creation_date="2026-12-02T00:00:00Z")  # fixed, so regenerating gives the same file
 
 
 if __name__ == "__main__":

@@ -44,7 +44,7 @@ import numpy as np
 
 from nmmm.errors import DataFileError, InvalidInputError
 
-__all__ = ["MeasuredSpectra", "read_cgats", "write_cgats", "read_cxf", "write_cxf", "cxf_geometries",
+__all__ = ["MeasuredSpectra", "read_cgats", "write_cgats", "read_cxf", "write_cxf", "cxf_geometries", "canonical_geometry",
            "read_spectra_csv", "read_measured", "PERCENT_THRESHOLD"]
 
 #: a reflectance factor above this is read as percent (and refused under ``unit="auto"``)
@@ -280,7 +280,8 @@ def _geometry_of_spec(spec, where: str = "CxF3") -> str | None:
                                     "one ColorSpecification per angle (as X-Rite's multi-angle exports write them)")
             return names[0]
         if kind == "UnknownGeometry":
-            return (el.text or "").strip() or None
+            text = (el.text or "").strip()
+            return None if text.lower() in ("", "unknown") else text
         if kind == "EmissiveMode":
             raise DataFileError(f"{where}: an emissive measurement (EmissiveMode), not a reflectance geometry")
         raise DataFileError(f"{where}: <{kind}> in GeometryChoice; CxF3-core allows SphereGeometry, SingleAngle, "
@@ -380,48 +381,107 @@ def read_cxf(path, geometry: str | None = None, unit: str = "auto") -> MeasuredS
     return MeasuredSpectra(w, R, tuple(n for n, *_ in chosen), want, {"geometries": geos})
 
 
+_ANGLES = re.compile(r"(-?\d+(?:\.\d+)?)([ac]?):(-?\d+(?:\.\d+)?)([ac]?)")
+
+
+def canonical_geometry(geometry: str | None) -> str | None:
+    """A measuring geometry in one spelling: ``"di:8"`` (sphere, specular included: SCI, d/8:i,
+    d:8i), ``"de:8"`` (SCE, d/8:e, d:8e), ``"d:8"`` (sphere, specular component not said),
+    ``"45a:0"`` / ``"0:45a"`` (annular or circumferential, ``c``), ``"45:0"`` (``45/0``, ``45°/0°``,
+    uniplanar); anything else stripped. CIE 15:2004 §5 names these geometries."""
+    if geometry is None:
+        return None
+    g = str(geometry).strip()
+    t = g.lower().replace(" ", "").replace("°", "").replace("/", ":").replace("_", "")
+    if t in ("sci", "di:8", "d:8i", "d:8:i", "d8i", "spin", "specularincluded", "d:8sci", "d8:i"):
+        return "di:8"
+    if t in ("sce", "de:8", "d:8e", "d:8:e", "d8e", "spex", "specularexcluded", "d:8sce", "d8:e"):
+        return "de:8"
+    if t in ("d:8", "d8", "8:d"):
+        return "d:8"
+    m = _ANGLES.fullmatch(t)
+    if m:
+        return f"{float(m.group(1)):g}{'a' if m.group(2) else ''}:{float(m.group(3)):g}{'a' if m.group(4) else ''}"
+    return g or None
+
+
 def _geometry_xml(spec_el, geometry: str | None):
-    m = re.fullmatch(r"\s*(-?\d+(?:\.\d+)?)\s*:\s*(-?\d+(?:\.\d+)?)\s*", geometry or "")
+    """MeasurementSpec with CxF3-core's GeometryChoice (the reader's mapping, reversed)."""
+    g = canonical_geometry(geometry)
     ms = ET.SubElement(spec_el, f"{{{CXF_NS}}}MeasurementSpec")
     ET.SubElement(ms, f"{{{CXF_NS}}}MeasurementType").text = "Spectrum_Reflectance"
     gc = ET.SubElement(ms, f"{{{CXF_NS}}}GeometryChoice")
-    if m:
+    m = _ANGLES.fullmatch(g or "")
+    if g in ("di:8", "de:8"):
+        ET.SubElement(gc, f"{{{CXF_NS}}}SphereGeometry").text = ("Specular_Included" if g == "di:8"
+                                                                  else "Specular_Excluded")
+    elif m:
         sa = ET.SubElement(gc, f"{{{CXF_NS}}}SingleAngle")
+        annular = bool(m.group(2) or m.group(4))
+        ET.SubElement(sa, f"{{{CXF_NS}}}SingleAngleConfiguration").text = "Annular" if annular else "Uniplanar"
         ET.SubElement(sa, f"{{{CXF_NS}}}IlluminationAngle").text = m.group(1)
-        ET.SubElement(sa, f"{{{CXF_NS}}}MeasurementAngle").text = m.group(2)
-    elif geometry:
-        ET.SubElement(gc, f"{{{CXF_NS}}}Geometry").text = geometry
+        ET.SubElement(sa, f"{{{CXF_NS}}}MeasurementAngle").text = m.group(3)
+    else:
+        ET.SubElement(gc, f"{{{CXF_NS}}}UnknownGeometry").text = g or "unknown"
     return ms
 
 
-def write_cxf(path, spectra, creator: str = "nmmm") -> Path:
+#: CxF3-core's WavelengthRange: StartWL an integer nm in [360, 400], Increment an integer nm
+CXF_START_WL_NM = (360, 400)
+
+
+def _cxf_grid(w: np.ndarray) -> tuple:
+    d = np.diff(w)
+    if not np.allclose(d, d[0]):
+        raise InvalidInputError("CxF3 spectra need a uniform wavelength grid (StartWL + Increment)")
+    start, inc = float(w[0]), float(d[0])
+    if abs(start - round(start)) > 1e-9 or abs(inc - round(inc)) > 1e-9:
+        raise InvalidInputError(f"CxF3-core's StartWL and Increment are integers (nm); this grid starts at {start:g} nm "
+                                f"in steps of {inc:g} nm — resample onto whole nanometres, or write CGATS")
+    lo, hi = CXF_START_WL_NM
+    if not lo <= round(start) <= hi:
+        raise InvalidInputError(f"CxF3-core requires StartWL between {lo} and {hi} nm; this grid starts at {start:g} nm "
+                                f"— {'extend the [spectral] range down to 400 nm' if start > hi else f'start it at {lo} nm or above'}"
+                                ", or write CGATS (any grid)")
+    return int(round(start)), int(round(inc))
+
+
+def write_cxf(path, spectra, creator: str = "nmmm", creation_date: str | None = None) -> Path:
     """CxF3 XML of one :class:`MeasuredSpectra` or several (one per geometry: a multi-angle set
-    whose objects share names), atomically. The grid must be uniform."""
+    whose objects share names), atomically, valid against CxF3-core: geometry ``di:8``/``de:8`` as
+    SphereGeometry Specular_Included/Excluded, ``45:0``/``45a:0``/``0:45a`` as SingleAngle with its
+    SingleAngleConfiguration (Uniplanar/Annular), others as UnknownGeometry; the grid uniform, in
+    whole nm, starting at 360–400 nm (the schema's StartWL). ``creation_date`` (ISO 8601, default
+    now, UTC) goes on the file and each object."""
+    from datetime import datetime, timezone
+
     from nmmm.atomic_io import atomic_write_bytes
+
+    created = creation_date or datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
     sets = [spectra] if isinstance(spectra, MeasuredSpectra) else list(spectra)
     ET.register_namespace("cc", CXF_NS)
     root = ET.Element(f"{{{CXF_NS}}}CxF")
     info = ET.SubElement(root, f"{{{CXF_NS}}}FileInformation")
     ET.SubElement(info, f"{{{CXF_NS}}}Creator").text = creator
+    ET.SubElement(info, f"{{{CXF_NS}}}CreationDate").text = created
     res = ET.SubElement(root, f"{{{CXF_NS}}}Resources")
     coll = ET.SubElement(res, f"{{{CXF_NS}}}ObjectCollection")
     objects = {}
     cs_coll = ET.SubElement(res, f"{{{CXF_NS}}}ColorSpecificationCollection")
     for k, s in enumerate(sets):
-        d = np.diff(s.wavelength_nm)
-        if not np.allclose(d, d[0]):
-            raise InvalidInputError("CxF3 spectra need a uniform wavelength grid (StartWL + Increment)")
+        start, inc = _cxf_grid(s.wavelength_nm)
         sid = f"CS{k + 1}"
         cs = ET.SubElement(cs_coll, f"{{{CXF_NS}}}ColorSpecification", Id=sid)
         ms = _geometry_xml(cs, s.geometry)
-        ET.SubElement(ms, f"{{{CXF_NS}}}WavelengthRange", StartWL=f"{s.wavelength_nm[0]:g}", Increment=f"{d[0]:g}")
+        ET.SubElement(ms, f"{{{CXF_NS}}}WavelengthRange", StartWL=str(start), Increment=str(inc))
         for name, r in zip(s.names, s.reflectance):
             if name not in objects:
                 obj = ET.SubElement(coll, f"{{{CXF_NS}}}Object", ObjectType="Standard", Name=name, Id=str(len(objects) + 1))
+                ET.SubElement(obj, f"{{{CXF_NS}}}CreationDate").text = created
                 objects[name] = ET.SubElement(obj, f"{{{CXF_NS}}}ColorValues")
             rs = ET.SubElement(objects[name], f"{{{CXF_NS}}}ReflectanceSpectrum", ColorSpecification=sid,
-                               StartWL=f"{s.wavelength_nm[0]:g}")
+                               StartWL=str(start))
             rs.text = " ".join(_fmt(v) for v in r)
     ET.indent(root)
     atomic_write_bytes(path, ET.tostring(root, encoding="utf-8", xml_declaration=True))
