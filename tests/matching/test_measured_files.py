@@ -258,3 +258,15 @@ def test_cxf_without_increment_is_an_error_naming_the_object(tmp_path):
                               objects=(("red panel", "CS1"),)).replace(' Increment="10"', "")
     with pytest.raises(DataFileError, match=r"object 'red panel': no wavelength Increment"):
         read_cxf(_write(tmp_path, "noinc.cxf", text))
+
+
+def test_percent_asked_for_factors_is_a_conflict_not_a_division(tmp_path):
+    """--percent on a file declared SPECTRAL_NORM 1, or whose values never exceed 1.5, is refused
+    (before, it divided factors by 100 and matched an almost black target)."""
+    declared = _write(tmp_path, "n1.txt", CGATS.replace("NUMBER_OF_FIELDS", "SPECTRAL_NORM 1\nNUMBER_OF_FIELDS"))
+    with pytest.raises(DataFileError, match="says SPECTRAL_NORM 1"):
+        read_cgats(declared, unit="percent")
+    with pytest.raises(DataFileError, match=r"no value exceeds 1.5 \(the largest is 0.8955\)"):
+        read_cgats(_write(tmp_path, "f.txt", CGATS), unit="percent")
+    with pytest.raises(DataFileError, match="drop --percent"):
+        read_spectra_csv(_write(tmp_path, "f.csv", "wavelength_nm,a\n400,0.1\n500,0.2\n"), unit="percent")

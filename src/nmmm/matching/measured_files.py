@@ -108,9 +108,13 @@ def _scaled(values: np.ndarray, unit: str, where: str) -> np.ndarray:
         raise InvalidInputError(f"unit must be one of {_UNITS}, got {unit!r}")
     if not np.all(np.isfinite(values)):
         raise DataFileError(f"{where}: a spectral value is not a finite number")
-    if unit == "percent":
-        return values / 100.0
     top = float(values.max()) if values.size else 0.0
+    if unit == "percent":
+        if top <= PERCENT_THRESHOLD:
+            raise DataFileError(f"{where}: read as percent (unit='percent', CLI --percent), but no value exceeds "
+                                f"{PERCENT_THRESHOLD:g} (the largest is {top:g}): these are reflectance factors (0-1); "
+                                "dividing them by 100 would give an almost black sample — drop --percent")
+        return values / 100.0
     if top > PERCENT_THRESHOLD:
         raise DataFileError(f"{where}: reflectance up to {top:g} — these look like percent, not factors (0-1); "
                             "read with unit='percent' (CLI --percent) to divide by 100, or fix the file")
@@ -182,11 +186,16 @@ def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
             raise DataFileError(f"{p.name}: line {no}: a spectral value is not a number") from None
         names.append(r[name_col] if name_col is not None else f"sample {len(names) + 1}")
     norm = keywords.get("SPECTRAL_NORM")
-    if unit == "auto" and norm is not None:
-        try:
-            unit = "percent" if abs(float(norm) - 100) < 1e-9 else "fraction" if abs(float(norm) - 1) < 1e-9 else unit
-        except ValueError:
-            pass
+    try:
+        declared = None if norm is None else ("percent" if abs(float(norm) - 100) < 1e-9 else
+                                              "fraction" if abs(float(norm) - 1) < 1e-9 else None)
+    except ValueError:
+        declared = None
+    if unit == "percent" and declared == "fraction":
+        raise DataFileError(f"{p.name}: read as percent (unit='percent', CLI --percent), but the file says SPECTRAL_NORM "
+                            f"{norm} (reflectance factors, 0-1); drop --percent, or fix the keyword if the data are percent")
+    if unit == "auto" and declared is not None:
+        unit = declared
     order = np.argsort([w for _, w in spec])
     w = np.array([spec[i][1] for i in order])
     R = _scaled(np.array(vals, float)[:, order] if vals else np.zeros((0, w.size)), unit, p.name)
