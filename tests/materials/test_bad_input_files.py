@@ -18,11 +18,11 @@ def _csv(tmp_path, name, text):
 
 
 @pytest.mark.parametrize("rows, match", [
-    ("0,1.5,0\n500,1.5,0\n", "wavelength 0 nm at data row 2 is not > 0"),
-    ("400,1e308,0\n500,1.5,0\n", "n = 1e\\+308 at data row 2 is above 1000"),
-    ("400,-1.5,0\n500,1.5,0\n", "n = -1.5 at data row 2; nmmm needs n > 0"),
-    ("400,0,0\n500,1.5,0\n", "n = 0 at data row 2"),
-    ("400,1.5,1e5\n500,1.5,0\n", "k = 100000 at data row 2"),
+    ("0,1.5,0\n500,1.5,0\n", "wavelength 0 nm at line 2 is not > 0"),
+    ("400,1e308,0\n500,1.5,0\n", "n = 1e\\+308 at line 2 is above 1000"),
+    ("400,-1.5,0\n500,1.5,0\n", "n = -1.5 at line 2; nmmm needs n > 0"),
+    ("400,0,0\n500,1.5,0\n", "n = 0 at line 2"),
+    ("400,1.5,1e5\n500,1.5,0\n", "k = 100000 at line 2"),
     ("0.3,1.5,0\n0.9,1.5,0\n", "look like µm under an nm header"),
 ])
 def test_csv_values_no_material_has_are_refused(tmp_path, rows, match):
@@ -137,3 +137,23 @@ def test_materials_show_of_bad_files_exits_2(tmp_path, capsys):
         rc = main(["materials", "show", str(p)])
         err = capsys.readouterr().err
         assert rc == 2 and err.startswith("error: ") and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("text, match", [
+    # extra columns are refused, never dropped silently
+    ("wavelength_nm,n,k,T\n400,1.5,0.01,99\n500,1.6,0.02,98\n", r"column 4 \('T'\) is not one nmmm reads"),
+    ("wavelength_nm,n,k\n400,1.5,0.01,99\n500,1.6,0.02,98\n", r"line 2 \('400,1.5,0.01,99'\) has 4 values.*header names 3"),
+    ("wavelength_nm,n,k\n400,1.5,0.01\n500,1.6,0.02\n600,1.7,0.03,5\n", r"line 4 .* has 4 values"),
+    # a row is named by its line in the file, comment and blank lines counted
+    ("# name: x\n# reference: y\nwavelength_nm,n,k\n\n400,1.5,0\n# note\n500,-1.5,0\n", r"n = -1.5 at line 7"),
+    ("# a comment\nwavelength_nm,n,k\n400,1.5,0\n500,x,0\n", r"line 4 \('500,x,0'\) is not numeric"),
+    ("# a comment\nwavelength_nm,n,k\n400,1.5,0\n\n500,1.5,-0.1\n", r"k < 0 at line 5"),
+    # % and tab are shown as written; semicolon / tab files are told to use commas
+    ("wavelength_nm,n,k %\n400,1.5,1\n500,1.6,2\n", r"got 'n,k %'"),
+    ("wavelength_nm;n;k\n400;1,5;0,01\n500;1,6;0,02\n", r"'wavelength_nm;n;k'.*semicolons: use commas"),
+    ("wavelength_nm\tn\tk\n400\t1.5\t0\n500\t1.6\t0\n", r"'wavelength_nm\\tn\\tk'.*tabs: use commas"),
+    ("wavelength_nm,n,k\n400,1,5,0,01\n500,1,6,0,02\n", r"line 2 .* has 5 values.*decimal commas"),
+])
+def test_csv_extra_columns_line_numbers_and_separator_hints(tmp_path, text, match):
+    with pytest.raises(DataFileError, match=match):
+        read_csv(_csv(tmp_path, "m.csv", text))

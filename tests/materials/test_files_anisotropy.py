@@ -26,10 +26,10 @@ def test_csv_round_trip(tmp_path):
 
 @pytest.mark.parametrize("body, match", [
     ("wavelength,n,k\n400,1.5,0\n", "unit"),
-    ("wavelength_nm,n,k\n400,1.5,0\n500,1.5,-0.1\n", "row 3"),
-    ("wavelength_nm,n,k\n400,1.5,0\n500,1.5,0\n450,1.5,0\n", "row 4"),
-    ("wavelength_nm,n,k\n400,1.5,0\n500,abc,0\n", "row 3"),
-    ("wavelength_nm,n,k\n400,1.5,0\n500,nan,0\n", "row 3"),
+    ("wavelength_nm,n,k\n400,1.5,0\n500,1.5,-0.1\n", "line 3"),
+    ("wavelength_nm,n,k\n400,1.5,0\n500,1.5,0\n450,1.5,0\n", "line 4"),
+    ("wavelength_nm,n,k\n400,1.5,0\n500,abc,0\n", "line 3"),
+    ("wavelength_nm,n,k\n400,1.5,0\n500,nan,0\n", "line 3"),
 ])
 def test_csv_errors_name_the_row(tmp_path, body, match):
     p = tmp_path / "bad.csv"

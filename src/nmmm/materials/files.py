@@ -31,7 +31,7 @@ from nmmm.materials.refractiveindex_formulas import formula_model
 
 _UNIT = {"nm": 1.0, "um": 1000.0, "µm": 1000.0, "μm": 1000.0, "micron": 1000.0, "microns": 1000.0, "mum": 1000.0}
 _WAVELENGTH_NAMES = ("wavelength", "lambda", "wl", "λ")
-_SHOWN_CHARS = set(" _.,;+-()[]µλ")
+_SHOWN_CHARS = set(" _.,;+-()[]µλ%\t")
 #: most columns a data row may have (a wider row is an error, not silently cut)
 _MAX_COLUMNS = 64
 
@@ -72,12 +72,17 @@ def _shown(text: str) -> str:
     return f"a {len(text)}-character line that is not a column header or numbers"
 
 
-def check_nk_table(p, w, n, k, row0: int = 2, what: str = "data row") -> None:
+def check_nk_table(p, w, n, k, row0: int = 2, what: str = "data row", lines=None) -> None:
     """Refuse tabulated constants no material has: n <= 0, n or k above :data:`N_MAX`, wavelengths
-    outside 10 nm - 1 mm (often µm values under an nm header, or the reverse); rows are named."""
+    outside 10 nm - 1 mm (often µm values under an nm header, or the reverse); rows are named
+    (``lines``: the file line of each row, named as ``line N``; else ``{what} {index + row0}``)."""
+
+    def at(j):
+        return f"line {lines[j]}" if lines is not None else f"{what} {j + row0}"
+
     bad = np.flatnonzero(w <= 0)
     if bad.size:
-        raise DataFileError(f"{p}: wavelength {w[bad[0]]:g} nm at {what} {bad[0] + row0} is not > 0")
+        raise DataFileError(f"{p}: wavelength {w[bad[0]]:g} nm at {at(bad[0])} is not > 0")
     if np.max(w) < WAVELENGTH_MIN_NM:
         raise DataFileError(f"{p}: the wavelengths run from {np.min(w):g} to {np.max(w):g} nm, below "
                             f"{WAVELENGTH_MIN_NM:g} nm; they look like µm under an nm header: name the column "
@@ -87,16 +92,16 @@ def check_nk_table(p, w, n, k, row0: int = 2, what: str = "data row") -> None:
                             "look like nm under a µm header: name the column 'wavelength_nm'")
     bad = np.flatnonzero((w < WAVELENGTH_MIN_NM) | (w > WAVELENGTH_MAX_NM))
     if bad.size:
-        raise DataFileError(f"{p}: wavelength {w[bad[0]]:g} nm at {what} {bad[0] + row0} is outside 10 nm - 1 mm; "
+        raise DataFileError(f"{p}: wavelength {w[bad[0]]:g} nm at {at(bad[0])} is outside 10 nm - 1 mm; "
                             "check the unit in the header")
     bad = np.flatnonzero(n <= 0)
     if bad.size:
-        raise DataFileError(f"{p}: n = {n[bad[0]]:g} at {what} {bad[0] + row0}; nmmm needs n > 0 (a real index; "
+        raise DataFileError(f"{p}: n = {n[bad[0]]:g} at {at(bad[0])}; nmmm needs n > 0 (a real index; "
                             "metals have small positive n and large k)")
     for col, name in ((n, "n"), (k, "k")):
         bad = np.flatnonzero(col > N_MAX)
         if bad.size:
-            raise DataFileError(f"{p}: {name} = {col[bad[0]]:g} at {what} {bad[0] + row0} is above {N_MAX:g}; "
+            raise DataFileError(f"{p}: {name} = {col[bad[0]]:g} at {at(bad[0])} is above {N_MAX:g}; "
                                 "no material has that (a unit or column mix-up?)")
 
 
@@ -153,6 +158,14 @@ def _cells(p: Path, text: str):
     return table
 
 
+def _table_lines(text: str, n_rows: int):
+    """The file line (1-based) of each row :func:`_cells` keeps (lines with a value before any
+    ``#``), or ``None`` when they cannot be matched one to one (a quoted cell spanning lines)."""
+    nums = [i for i, ln in enumerate(text.splitlines(), start=1)
+            if any(c.strip() for c in ln.split("#", 1)[0].split(","))]
+    return nums if len(nums) == n_rows else None
+
+
 def read_csv(path: str | PathLike[str], name: str | None = None) -> TabulatedMaterial:
     """Read a CSV of wavelength, n, k (unit declared in the header) as a Material."""
     import pandas as pd
@@ -161,16 +174,33 @@ def read_csv(path: str | PathLike[str], name: str | None = None) -> TabulatedMat
     text = _text(p)
     meta = _metadata(text)
     table = _cells(p, text)
+    lines = _table_lines(text, len(table))
+
+    def line(pos):  # the file line of table row pos (0: the header)
+        return lines[pos] if lines is not None else pos + 1
+
     first = [c for c in table.iloc[0].tolist() if c != ""]
     header = [h.lower() for h in first]
     if len(header) < 2:
+        sep = next((name for ch, name in ((";", "semicolons"), ("\t", "tabs")) if first and ch in first[0]), None)
+        hint = (f"; the file separates its columns with {sep}: use commas between columns and decimal points "
+                "(wavelength_nm,n,k / 400,1.5,0.01)") if sep else ""
         raise DataFileError(f"{p}: need columns wavelength, n[, k]; the first line ({_shown(','.join(first))}) "
-                            "is not such a header (e.g. wavelength_nm,n,k)")
+                            f"is not such a header (e.g. wavelength_nm,n,k){hint}")
     scale = _wavelength_unit(header[0], p)
     if header[1] not in ("n",) or (len(header) > 2 and header[2] not in ("k",)):
         raise DataFileError(f"{p}: columns after the wavelength must be named 'n' and 'k'; got "
                             f"{_shown(','.join(first[1:]))}")
-    header = header[:3]
+    if len(header) > 3:
+        raise DataFileError(f"{p}: column 4 ({_shown(first[3])}) is not one nmmm reads: a material CSV has the "
+                            "columns wavelength, n and k; remove the others (nothing is dropped silently)")
+    extra = (table.iloc[1:, len(header):] != "").to_numpy().any(axis=1)
+    if extra.any():
+        r = int(np.flatnonzero(extra)[0])
+        filled = [c for c in table.iloc[r + 1].tolist() if c != ""]
+        raise DataFileError(f"{p}: line {line(r + 1)} ({_shown(','.join(filled))}) has {len(filled)} values, but the "
+                            f"header names {len(header)} columns; remove the extra values (decimal commas? use "
+                            "decimal points, and commas only between columns)")
     cells = table.iloc[1:, : len(header)]
     if len(cells) < 1:
         raise DataFileError(f"{p}: need at least two data rows")
@@ -180,13 +210,13 @@ def read_csv(path: str | PathLike[str], name: str | None = None) -> TabulatedMat
     for r in suspect:
         row = cells.iloc[r].tolist()
         filled = [c for c in row if c != ""]
-        i = r + 2
+        i = line(r + 1)
         try:
             [float(c) for c in filled]
         except ValueError:
-            raise DataFileError(f"{p}: row {i} ({_shown(','.join(filled))}) is not numeric") from None
+            raise DataFileError(f"{p}: line {i} ({_shown(','.join(filled))}) is not numeric") from None
         if len(filled) != len(header):
-            raise DataFileError(f"{p}: row {i} has {len(filled)} values, expected {len(header)}")
+            raise DataFileError(f"{p}: line {i} has {len(filled)} values, expected {len(header)}")
         break  # the first suspect row is well-formed: its NaN/inf is told by the finiteness check
     arr = numbers
     if arr.shape[0] < 2:
@@ -197,15 +227,15 @@ def read_csv(path: str | PathLike[str], name: str | None = None) -> TabulatedMat
     for j, (col, what) in enumerate(((w, "wavelength"), (n, "n"), (k, "k"))):
         bad = np.flatnonzero(~np.isfinite(col))
         if bad.size:
-            raise DataFileError(f"{p}: {what} is not finite at data row {bad[0] + 2}")
+            raise DataFileError(f"{p}: {what} is not finite at line {line(bad[0] + 1)}")
     bad = np.flatnonzero(k < 0)
     if bad.size:
-        raise DataFileError(f"{p}: k < 0 at data row {bad[0] + 2} (k = {k[bad[0]]:g}); nmmm needs k >= 0")
+        raise DataFileError(f"{p}: k < 0 at line {line(bad[0] + 1)} (k = {k[bad[0]]:g}); nmmm needs k >= 0")
     bad = np.flatnonzero(np.diff(w) <= 0)
     if bad.size:
         raise DataFileError(
-            f"{p}: wavelengths must increase strictly; data row {bad[0] + 3} does not follow row {bad[0] + 2}")
-    check_nk_table(p, w, n, k)
+            f"{p}: wavelengths must increase strictly; line {line(bad[0] + 2)} does not follow line {line(bad[0] + 1)}")
+    check_nk_table(p, w, n, k, lines=[line(j + 1) for j in range(w.size)])
     try:
         return TabulatedMaterial(name or meta.get("name", p.stem), w, n, k, reference=meta.get("reference", str(p)))
     except InvalidInputError as exc:
