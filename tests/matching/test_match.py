@@ -102,6 +102,16 @@ def test_bad_inputs(thin_tint):
         match_recipe(thin_tint, target_lab=[50, 10, 10], mode="spectral")
 
 
+def test_bounds_are_checked_up_front_with_the_values_typed():
+    """A bound the recipe refuses is named, with the value the user typed, before any fit (before,
+    a negative thickness LO surfaced later at a value the optimiser had chosen)."""
+    raw, _, _ = read_toml(example_path("hematite_tint"))
+    with pytest.raises(RecipeError, match=r"film.thickness_nm=-500:16000: LO = -500 is not a valid value"):
+        RecipeModel(raw, ["film.thickness_nm=-500:16000"])
+    with pytest.raises(RecipeError, match=r"pigments.0.diameter_nm=-5:300: LO = -5 is not a valid value.*> 0"):
+        RecipeModel(raw, ["pigments.0.diameter_nm=-5:300"])
+
+
 def test_other_keys_take_the_recipe_path():
     raw, _, _ = read_toml(example_path("hematite_tint"))
     m = RecipeModel(set_key(raw, "film.thickness_nm", 8000.0), ["film.thickness_nm=4000:16000"])

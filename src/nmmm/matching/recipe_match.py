@@ -105,6 +105,21 @@ def _stack_index(recipe, m):
 class RecipeModel:
     """The forward model of a recipe with free keys (module docstring)."""
 
+    def _check_bounds_parse(self, raw, base):
+        """Each bound checked before any fit: the recipe with the key at LO, then at HI, must parse,
+        so a bound the schema refuses (a negative thickness) is named with the value the user typed,
+        not met later at some value the optimiser chose."""
+        from nmmm.errors import NmmmError
+        from nmmm.recipes.schema import parse_recipe, set_key
+
+        for b in self.bounds:
+            for side, value in (("LO", b.lo), ("HI", b.hi)):
+                try:
+                    parse_recipe(set_key(raw, b.key, value), base_dir=base)
+                except NmmmError as exc:
+                    raise RecipeError(f"--vary {b.key}={b.lo:g}:{b.hi:g}: {side} = {value:g} is not a valid value for "
+                                      f"{b.key} ({exc}); choose a range the recipe accepts") from None
+
     def __init__(self, recipe, bounds, solver: str = "ad"):
         from nmmm.recipes.paint_stack import _solver, geometry_of, recipe_stack
         from nmmm.recipes.run import _grid, build_materials
@@ -123,6 +138,7 @@ class RecipeModel:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise RecipeError(f"{b.key}: is {v!r}, not a number; only numeric keys can be matched")
         self.recipe = parse_recipe(raw, base_dir=base)
+        self._check_bounds_parse(raw, base)
         if self.recipe.film is None and self.recipe.coats is None:
             raise RecipeError("matching needs a paint recipe ([[pigments]] + [film], or [[coats]]); "
                               f"this one is a {self.recipe.macro!r} recipe")
