@@ -69,3 +69,17 @@ def test_match_cli_reads_the_shipped_cxf_batch(tmp_path, capsys):
     assert main(["match", str(EXAMPLES / "batch.cxf"), str(EXAMPLES / "tint_base.toml"), "--vary",
                  "pigments.0.fraction=0.005:0.08", "-o", str(out), "--no-progress"]) == 0
     assert "pigments.0.fraction = 0.021" in capsys.readouterr().out
+
+
+def test_unidentifiable_keys_are_said_in_stdout_and_the_report(tmp_path, capsys):
+    """The opaque 60 µm tint: one spectrum fixes only the hematite:rutile ratio, so each fraction's
+    σ (10 and 74 here) exceeds its bound span; the match says so instead of reporting fractions."""
+    out = tmp_path / "m"
+    assert main(["match", str(EXAMPLES / "batch.cxf"), str(EXAMPLES / "tint_base.toml"), "--mode", "spectral",
+                 "--vary", "pigments.0.fraction=0.005:0.08", "--vary", "pigments.1.fraction=0.02:0.25",
+                 "-o", str(out), "--no-progress"]) == 0
+    words = "only the ratio is identifiable from one spectrum; measure over black and white or fix one key"
+    std = capsys.readouterr()
+    assert std.out.count(words) == 2 and words not in std.err
+    assert "pigments.1.fraction = " in std.out and "exceeds its bound span 0.02–0.25" in std.out
+    assert (out / "report.md").read_text(encoding="utf-8").count(words) == 2

@@ -47,7 +47,7 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
     from pathlib import Path
 
     from nmmm.matching.outputs import write_match_outputs
-    from nmmm.matching.recipe_match import RecipeModel, match_recipe
+    from nmmm.matching.recipe_match import IdentifiabilityWarning, RecipeModel, match_recipe
 
     ms, lab, name = _target(target, "percent" if percent else "auto", geometry, sample)
     model = RecipeModel(recipe, varies)
@@ -63,8 +63,8 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
         warnings.simplefilter("always")
         res = match_recipe(model, R, lab, mode=mode, illuminant=illuminant, test_illuminants=tests,
                            metamerism_weight=metamerism_weight, progress=not no_progress)
-    for w in caught:
-        click.echo(f"warning: {w.message}", err=True)
+    for w in caught:  # an unidentifiable key is part of the result (stdout and report.md), others on stderr
+        click.echo(f"warning: {w.message}", err=not issubclass(w.category, IdentifiabilityWarning))
     out = Path(output) if output else Path(f"match-{Path(recipe).stem}")
     files = write_match_outputs(res, out, name)
     click.echo("  ".join(f"{k} = {v:.5g}" for k, v in res.values.items()))

@@ -60,6 +60,10 @@ MATCH_MODES = ("colorimetric", "spectral")
 _FRACTION_KEY = re.compile(r"^(?:coats\.(\d+)\.)?pigments\.(\d+)\.fraction$")
 
 
+class IdentifiabilityWarning(UserWarning):
+    """A matched key whose standard error exceeds its bound span (one spectrum cannot pin it)."""
+
+
 @dataclass(frozen=True)
 class Bound:
     key: str
@@ -429,6 +433,14 @@ def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, m
         except np.linalg.LinAlgError:
             se = {b.key: float("inf") for b in model.bounds}
     msgs = []
+    for j, b in enumerate(model.bounds):
+        sigma = se.get(b.key, 0.0)
+        if not sigma <= span[j]:  # also inf / nan: nothing in the spectrum pins the key within its range
+            msg = (f"{b.key} = {x[j]:.4g} ± {sigma:.3g}: its uncertainty (noise {noise:g}) exceeds its bound span "
+                   f"{b.lo:g}–{b.hi:g} — only the ratio is identifiable from one spectrum; measure over black and white "
+                   "or fix one key")
+            warnings.warn(IdentifiabilityWarning(msg), stacklevel=2)
+            msgs.append(msg)
     if best["de00"] > tolerance_de00:
         msg = (f"the best match is ΔE00 = {best['de00']:.2f} (> {tolerance_de00:g}) from the target: the colourants "
                f"cannot reach it — {_missing_words(dlch)}" + (f"; stopped by the bounds {active}" if active else "")
