@@ -83,6 +83,26 @@ def test_unreachable_target_warns_with_the_missing_direction(thin_tint):
     assert res.de00 > 1 and res.warnings
 
 
+def test_cannot_reach_names_the_hue_direction_in_words():
+    """The 'cannot reach' warning's hue: the CIE hue angle difference h_ab(match) - h_ab(target),
+    computed here from atan2 by hand, and the hue the match has turned towards."""
+    from nmmm.matching.recipe_match import _hue_words, _missing_words
+
+    def lab(L, C, h):
+        return np.array([L, C * np.cos(np.radians(h)), C * np.sin(np.radians(h))])
+
+    assert _hue_words(lab(40, 30, 30), lab(40, 30, 50)) == "too yellow: Δh° +20.0"  # a red turned yellower
+    assert _hue_words(lab(40, 30, 30), lab(40, 30, 15)) == "too red: Δh° -15.0"
+    assert _hue_words(lab(60, 30, 135), lab(60, 30, 115)) == "too yellow: Δh° -20.0"  # a green turned yellower
+    assert _hue_words(lab(60, 30, 135), lab(60, 30, 160)) == "too green: Δh° +25.0"
+    assert _hue_words(lab(50, 20, 350), lab(50, 20, 10)) == "too red: Δh° +20.0"  # across 0°
+    assert _hue_words(lab(50, 20, 250), lab(50, 20, 200)) == "too green: Δh° -50.0"
+    assert _hue_words(lab(50, 20, 230), lab(50, 20, 39)) == "too red: Δh° +169.0"  # past blue to red
+    assert _hue_words(lab(50, 1, 250), lab(50, 20, 200)) is None  # a near-neutral target has no hue angle
+    words = _missing_words(np.array([0.0, 0.0, 10.4]), lab(40, 30, 30), lab(40, 30, 50))
+    assert words.startswith("too yellow: Δh° +20.0 (ΔH* +10.40)")
+
+
 def test_bad_inputs(thin_tint):
     raw, _, _ = read_toml(example_path("hematite_tint"))
     with pytest.raises(RecipeError, match="no such key"):

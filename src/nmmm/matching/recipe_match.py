@@ -306,7 +306,29 @@ def _check_target(target, w):
     return R
 
 
-def _missing_words(dlch):
+#: CIELAB's hue circle (CIE 15:2004 §8.2.1): h_ab = 0° red (+a*), 90° yellow (+b*), 180° green, 270° blue
+_HUE_WORDS = ("red", "yellow", "green", "blue")
+
+
+def _hue_words(lab_target, lab_match, min_chroma: float = 2.0) -> str | None:
+    """``"too yellow: Δh° +20.0"``: the CIE hue angle of the match minus the target's, and the hue
+    it has turned towards (of red, yellow, green, blue round the circle in that sense: the last one
+    passed, or the next one ahead when none is); None
+    when either colour is nearly neutral (C*ab < ``min_chroma``, the hue angle undefined)."""
+    a, b = np.asarray(lab_target, float), np.asarray(lab_match, float)
+    if min(np.hypot(a[1], a[2]), np.hypot(b[1], b[2])) < min_chroma:
+        return None
+    h_t = float(np.degrees(np.arctan2(a[2], a[1]))) % 360.0
+    h_m = float(np.degrees(np.arctan2(b[2], b[1]))) % 360.0
+    dh = (h_m - h_t + 180.0) % 360.0 - 180.0
+    sense = 1.0 if dh > 0 else -1.0
+    ahead = [((90.0 * k - h_t) * sense) % 360.0 or 360.0 for k in range(4)]  # how far round each hue lies
+    passed = [k for k in range(4) if ahead[k] <= abs(dh)]
+    k = max(passed, key=lambda i: ahead[i]) if passed else min(range(4), key=lambda i: ahead[i])
+    return f"too {_HUE_WORDS[k]}: Δh° {dh:+.1f}"
+
+
+def _missing_words(dlch, lab_target=None, lab_match=None):
     dL, dC, dH = dlch
     bits = []
     if abs(dL) > 0.3:
@@ -314,7 +336,8 @@ def _missing_words(dlch):
     if abs(dC) > 0.3:
         bits.append(f"{'too chromatic' if dC > 0 else 'too dull'} by ΔC* {dC:+.2f}")
     if abs(dH) > 0.3:
-        bits.append(f"hue off by ΔH* {dH:+.2f}")
+        hue = None if lab_target is None else _hue_words(lab_target, lab_match)
+        bits.append(f"{hue} (ΔH* {dH:+.2f})" if hue else f"hue off by ΔH* {dH:+.2f}")
     return ", ".join(bits) or "small in every direction"
 
 
@@ -443,7 +466,7 @@ def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, m
             msgs.append(msg)
     if best["de00"] > tolerance_de00:
         msg = (f"the best match is ΔE00 = {best['de00']:.2f} (> {tolerance_de00:g}) from the target: the colourants "
-               f"cannot reach it — {_missing_words(dlch)}" + (f"; stopped by the bounds {active}" if active else "")
+               f"cannot reach it — {_missing_words(dlch, lab_t, best['lab'])}" + (f"; stopped by the bounds {active}" if active else "")
                + " (add a colourant that supplies the missing direction, or widen the bounds)")
         warnings.warn(msg, stacklevel=2)
         msgs.append(msg)
