@@ -64,9 +64,11 @@ class LazyGroup(click.Group):
             module = importlib.import_module(module_name)
             return _with_scale_tours(name, getattr(module, attr))
         except (ImportError, AttributeError) as exc:
-            @click.command(name=name, help=f"{help_text} (unavailable: {exc})")
+            reason = str(exc)  # `exc` itself is unbound once the except block ends
+
+            @click.command(name=name, help=f"{help_text} (unavailable: {reason})")
             def unavailable():
-                raise click.ClickException(f"'nmmm {name}' is not available: {exc}")
+                raise click.ClickException(f"'nmmm {name}' is not available: {reason}")
 
             return unavailable
 
