@@ -83,3 +83,19 @@ def test_unidentifiable_keys_are_said_in_stdout_and_the_report(tmp_path, capsys)
     assert std.out.count(words) == 2 and words not in std.err
     assert "pigments.1.fraction = " in std.out and "exceeds its bound span 0.02–0.25" in std.out
     assert (out / "report.md").read_text(encoding="utf-8").count(words) == 2
+
+
+def test_match_cli_geometry_mismatch_in_words(tmp_path, capsys):
+    """The target's geometry canonicalised before comparing (SCE = de:8: no warning; SCI against the
+    recipe's de:8: the gloss, and which reads lighter)."""
+    from nmmm.matching import MeasuredSpectra, write_cgats
+
+    recipe = example_path("hematite_tint")
+    m = RecipeModel(recipe, ["pigments.0.fraction=0.005:0.08"])
+    for spelling, words in (("SCE", None), ("SCI", "the target reads lighter")):
+        target = write_cgats(tmp_path / f"{spelling}.cgats", MeasuredSpectra(m.wavelength_nm, m.reflectance([0.021])[None],
+                                                                            ("batch",), spelling))
+        assert main(["match", str(target), str(recipe), "--vary", "pigments.0.fraction=0.005:0.08",
+                     "-o", str(tmp_path / spelling), "--no-progress"]) == 0
+        err = capsys.readouterr().err
+        assert (words in err) if words else ("geometry" not in err)

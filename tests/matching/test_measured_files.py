@@ -270,3 +270,37 @@ def test_percent_asked_for_factors_is_a_conflict_not_a_division(tmp_path):
         read_cgats(_write(tmp_path, "f.txt", CGATS), unit="percent")
     with pytest.raises(DataFileError, match="drop --percent"):
         read_spectra_csv(_write(tmp_path, "f.csv", "wavelength_nm,a\n400,0.1\n500,0.2\n"), unit="percent")
+
+
+@pytest.mark.parametrize("spelling, canonical", [
+    ("45/0", "45:0"), ("45°/0°", "45:0"), ("45:0", "45:0"), ("45a:0", "45a:0"), ("45c/0", "45a:0"), ("0/45a", "0:45a"),
+    ("SCI", "di:8"), ("d/8:i", "di:8"), ("d:8i", "di:8"), ("SCE", "de:8"), ("d/8:e", "de:8"), ("d/8", "d:8"),
+    ("  de:8 ", "de:8"), (None, None)])
+def test_canonical_geometry(spelling, canonical):
+    from nmmm.matching.measured_files import canonical_geometry
+
+    assert canonical_geometry(spelling) == canonical
+
+
+def test_geometry_mismatch_words_per_case():
+    from nmmm.matching.measured_files import geometry_mismatch
+
+    assert geometry_mismatch("SCE", "de:8") is None and geometry_mismatch("d/8:i", "di:8") is None
+    assert geometry_mismatch("0:45a", "45a:0") is None and geometry_mismatch(None, "de:8") is None
+    sci = geometry_mismatch("SCI", "de:8")
+    assert "specular component included (SCI)" in sci and "the target reads lighter" in sci
+    assert 'geometry = "di:8"' in sci
+    assert "the prediction reads lighter" in geometry_mismatch("de:8", "di:8")
+    assert "SCI/SCE setting" in geometry_mismatch("d/8", "de:8")
+    assert "uniplanar, or annular not said" in geometry_mismatch("45/0", "45a:0")
+    assert "not comparable" in geometry_mismatch("45a:0", "de:8") and 'geometry = "45a:0"' in geometry_mismatch("45a:0", "de:8")
+    assert "differ only by the 0° / 8° incidence" in geometry_mismatch("0:d", "di:8")
+    assert "not one nmmm predicts" in geometry_mismatch("45as15", "45a:0")
+
+
+def test_geometry_choice_and_file_geometry_compare_canonically(tmp_path):
+    w = np.arange(400.0, 501.0, 20.0)
+    sets = [MeasuredSpectra(w, np.full((1, w.size), v), ("panel",), g) for v, g in ((0.3, "di:8"), (0.2, "de:8"))]
+    p = write_cxf(tmp_path / "sphere.cxf", sets)
+    assert read_cxf(p, geometry="SCE").reflectance[0, 0] == pytest.approx(0.2)
+    assert read_measured(write_cgats(tmp_path / "s.cgats", sets[0]), geometry="SCI").geometry == "di:8"

@@ -46,6 +46,7 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
     import warnings
     from pathlib import Path
 
+    from nmmm.matching.measured_files import geometry_mismatch
     from nmmm.matching.outputs import write_match_outputs
     from nmmm.matching.recipe_match import IdentifiabilityWarning, RecipeModel, match_recipe
 
@@ -55,10 +56,9 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
     if ms is not None:
         ms.spectrum(name)  # an unknown --sample names the file's samples
         R = ms.on_grid(model.wavelength_nm)[ms.names.index(name)]
-    if ms is not None and ms.geometry and ms.geometry.replace(" ", "").lower() != model.geometry.lower():
-        click.echo(f"warning: the target was measured at {ms.geometry!r}, the recipe predicts {model.geometry!r} "
-                   "([measurement] geometry); a specular-included reading against an excluded one differs by the gloss",
-                   err=True)
+    differs = geometry_mismatch(ms.geometry, model.geometry) if ms is not None else None
+    if differs:
+        click.echo(f"warning: {differs}", err=True)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = match_recipe(model, R, lab, mode=mode, illuminant=illuminant, test_illuminants=tests,

@@ -372,7 +372,7 @@ def read_cxf(path, geometry: str | None = None, unit: str = "auto") -> MeasuredS
         raise DataFileError(f"{p.name}: spectra at {len(geos)} geometries {geos}; a spectrum set is one geometry — "
                             "choose one (geometry=..., CLI --geometry)")
     want = geos[0] if geometry is None else geometry
-    chosen = [s for s in samples if s[1] == want]
+    chosen = [s for s in samples if canonical_geometry(s[1]) == canonical_geometry(want)]  # --geometry SCE finds de:8
     if not chosen:
         raise DataFileError(f"{p.name}: no spectra at geometry {geometry!r}; the file has {geos}")
     names = [n for n, *_ in chosen]
@@ -387,7 +387,7 @@ def read_cxf(path, geometry: str | None = None, unit: str = "auto") -> MeasuredS
             raise DataFileError(f"{p.name}: object {name!r} is on another wavelength grid ({wi[0]:g}–{wi[-1]:g} nm, "
                                 f"{wi.size} values) than the first ({w[0]:g}–{w[-1]:g} nm, {w.size})")
     R = _scaled(np.stack([v for *_, v in chosen]), unit, p.name)
-    return MeasuredSpectra(w, R, tuple(n for n, *_ in chosen), want, {"geometries": geos})
+    return MeasuredSpectra(w, R, tuple(n for n, *_ in chosen), chosen[0][1], {"geometries": geos})
 
 
 _ANGLES = re.compile(r"(-?\d+(?:\.\d+)?)([ac]?):(-?\d+(?:\.\d+)?)([ac]?)")
@@ -412,6 +412,43 @@ def canonical_geometry(geometry: str | None) -> str | None:
     if m:
         return f"{float(m.group(1)):g}{'a' if m.group(2) else ''}:{float(m.group(3)):g}{'a' if m.group(4) else ''}"
     return g or None
+
+
+_SPHERE_WORDS = {"di:8": "a sphere with the specular component included (SCI)",
+                 "de:8": "a sphere with the specular component excluded (SCE)",
+                 "d:8": "a sphere, the specular component not said"}
+_PREDICTABLE = ("di:8", "de:8", "0:d", "45a:0", "0:45a")
+
+
+def geometry_mismatch(measured: str | None, predicted: str) -> str | None:
+    """What differs between a target's measuring geometry and the recipe's prediction, in words
+    (None when they agree: same geometry after :func:`canonical_geometry`, or 45a:0 against 0:45a,
+    equal by Helmholtz reciprocity)."""
+    m, p = canonical_geometry(measured), canonical_geometry(predicted)
+    if m is None or m == p or {m, p} == {"45a:0", "0:45a"}:
+        return None
+    fix = f'; set [measurement] geometry = "{m}" in the recipe to predict what was measured' if m in _PREDICTABLE else ""
+    if {m, p} == {"di:8", "de:8"}:
+        lighter = "target" if m == "di:8" else "prediction"
+        return (f"the target was measured {_SPHERE_WORDS[m]}, the recipe predicts {_SPHERE_WORDS[p]}: they differ by the "
+                f"gloss (about 4 % reflected at the surface), so the {lighter} reads lighter, most on dark colours{fix}")
+    if m == "d:8" and p in ("di:8", "de:8"):
+        return (f"the target's geometry {measured!r} is {_SPHERE_WORDS[m]}; the recipe predicts {_SPHERE_WORDS[p]} — "
+                "check the instrument's SCI/SCE setting (they differ by the gloss)")
+    if m == "45:0" and p in ("45a:0", "0:45a"):
+        return (f"the target is {measured!r} (uniplanar, or annular not said), the recipe predicts {p} (annular): equal "
+                "for a diffusing, non-directional paint; a metallic, pearlescent or textured finish differs")
+    if {m, p} <= {"0:d", "di:8"}:
+        return (f"the target is {m}, the recipe predicts {p}: both include the specular component and differ only by the "
+                f"0° / 8° incidence (negligible for a matt or semi-gloss paint){fix}")
+    sphere = lambda g: g in _SPHERE_WORDS or g == "0:d"  # noqa: E731
+    if sphere(m) != sphere(p) and (sphere(m) or _ANGLES.fullmatch(m)):
+        kind_m = "a sphere (diffuse) reading" if sphere(m) else "a directional (45°/0°) reading"
+        kind_p = "a sphere (diffuse) prediction" if sphere(p) else "a directional (45°/0°) prediction"
+        return (f"the target is {kind_m} ({m}), the recipe gives {kind_p} ({p}): a sphere includes light at every "
+                f"angle, 45°/0° excludes the gloss and sees the surface texture — not comparable{fix}")
+    return (f"the target's geometry {measured!r} is not one nmmm predicts ({', '.join(_PREDICTABLE)}); the recipe "
+            f"predicts {p} — check that they describe the same measurement")
 
 
 def _geometry_xml(spec_el, geometry: str | None):
@@ -540,7 +577,7 @@ def read_measured(path, unit: str = "auto", geometry: str | None = None) -> Meas
         return read_cxf(p, geometry, unit)
     if suf in (".txt", ".cgats", ".cgt", ".it8", ".ti3"):
         s = read_cgats(p, unit)
-        if geometry is not None and s.geometry not in (None, geometry):
+        if geometry is not None and s.geometry is not None and canonical_geometry(s.geometry) != canonical_geometry(geometry):
             raise DataFileError(f"{p.name}: measured at {s.geometry!r}, not {geometry!r}")
         return s
     if suf == ".csv":
