@@ -88,3 +88,23 @@ def test_imperfect_pair_uses_the_additive_correction():
     lt_s, lt_m = _lab_colour(STD, "FL11"), _lab_colour(smp, "FL11")
     expected = colour.delta_E(lt_s, lt_m - (lr_m - lr_s), method="CIE 2000")
     assert metamerism_index(W, STD, smp, "TL84") == pytest.approx(expected, abs=1e-6)
+
+
+def test_negative_corrected_lightness_is_said_not_silently_clipped():
+    """A near-black standard against a bright blue sample: the additive correction (L*_A(sample) -
+    L*_D65(sample) + L*_D65(standard)) falls below 0; the index warns that the pair is no near match."""
+    import warnings
+
+    from nmmm.colour import spectra_to_lab
+    from nmmm.matching.metamerism import metamerism_index
+
+    w = np.arange(400.0, 701.0, 10.0)
+    std, smp = np.full(w.size, 0.001), np.where(w < 520, 0.6, 0.0)
+    L = {ill: spectra_to_lab(w, r, ill)[0] for ill, r in (("A", smp), ("D65", smp))}
+    expected = L["A"] - L["D65"] + spectra_to_lab(w, std, "D65")[0]
+    assert expected < 0
+    with pytest.warns(UserWarning, match=rf"L\* under A to {expected:.2f} < 0 \(clipped to 0\).*not a metamerism index"):
+        metamerism_index(w, std, smp, "A")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        metamerism_index(w, smp, smp * 1.01, "A")  # a near match: no warning

@@ -5,7 +5,7 @@
   ``(ΔL'/kL SL, ΔC'/kC SC + ½RT ΔH'/kH SH, √(1 − RT²/4) ΔH'/kH SH)`` — the square of its norm
   expands to ΔE00² = (ΔL'/SL)² + (ΔC'/SC)² + (ΔH'/SH)² + RT (ΔC'/SC)(ΔH'/SH), and |RT| ≤ 2.
 - :func:`metamerism_index` — the CIE special metamerism index for a change in illuminant
-  (CIE 15:2004 §9.2.2; ISO 18314-3:2018 §5): the colour difference of a pair under a test
+  (CIE 15:2004 §9.2.2; ISO 18314-4:2015): the colour difference of a pair under a test
   illuminant after the pair's difference under the reference illuminant is removed by the
   *additive* correction in CIELAB (Lab*_test(sample) − [Lab*_ref(sample) − Lab*_ref(standard)]),
   with ΔE00 as the difference formula (stated, as CIE 15 asks). A pair matched exactly under the
@@ -17,7 +17,8 @@ References
   supplementary test data, and mathematical observations", Color Res. Appl. 30, 21 (2005).
   doi:10.1002/col.20070
 - CIE 15:2004 Colorimetry, 3rd ed., §9.2 (special metamerism indices).
-- ISO 18314-3:2018 Analytical colorimetry — Part 3: Special indices.
+- ISO 18314-4:2015 Analytical colorimetry — Part 4: Metamerism index for pairs of samples for change of
+  illuminant.
 """
 
 from __future__ import annotations
@@ -89,5 +90,13 @@ def metamerism_index(wavelength_nm: ArrayLike, standard: ArrayLike, sample: Arra
     lab_std_t = spectra_to_lab(w, std, test_illuminant, observer)
     lab_smp_t = spectra_to_lab(w, smp, test_illuminant, observer)
     corrected = lab_smp_t - (lab_smp_r - lab_std_r)
-    corrected[..., 0] = np.clip(corrected[..., 0], 0, None)
+    if np.any(corrected[..., 0] < 0):  # said, then clipped (CIELAB has no L* < 0)
+        import warnings
+
+        worst = float(np.min(corrected[..., 0]))
+        warnings.warn(f"metamerism index: the additive correction takes the sample's L* under {test_illuminant} to "
+                      f"{worst:.2f} < 0 (clipped to 0) — the pair differs too much under {reference_illuminant} (the "
+                      "correction assumes a near match there, ISO 18314-4), so this is not a metamerism index; match the "
+                      "pair first", stacklevel=2)
+        corrected[..., 0] = np.clip(corrected[..., 0], 0, None)
     return np.asarray(delta_e2000(np.broadcast_to(lab_std_t, corrected.shape), corrected))
