@@ -71,6 +71,14 @@ def test_match_cli_reads_the_shipped_cxf_batch(tmp_path, capsys):
     assert "pigments.0.fraction = 0.021" in capsys.readouterr().out
 
 
+def test_match_cli_says_which_sample_of_a_multi_sample_file(tmp_path, capsys):
+    out = tmp_path / "m"
+    args = ["match", str(EXAMPLES / "ladder.cgats"), str(EXAMPLES / "tint_base.toml"), "--vary",
+            "pigments.0.fraction=0.005:0.08", "-o", str(out), "--no-progress"]
+    main(args + ["--sample", "1:4"])
+    assert "matching sample '1:4' (3 of 5; --sample chooses another)" in capsys.readouterr().out
+
+
 def test_unidentifiable_keys_are_said_in_stdout_and_the_report(tmp_path, capsys):
     """The opaque 60 µm tint: one spectrum fixes only the hematite:rutile ratio, so each fraction's
     σ (10 and 74 here) exceeds its bound span; the match says so instead of reporting fractions."""

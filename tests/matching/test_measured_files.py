@@ -45,6 +45,11 @@ def test_cgats_round_trip(tmp_path):
     np.testing.assert_allclose(back.reflectance, R, atol=5e-7)
     np.testing.assert_array_equal(back.wavelength_nm, w)
     assert back.names == s.names and back.geometry == "45:0"
+    lines = (tmp_path / "out.cgats").read_text().splitlines()  # CGATS.17: a non-reserved keyword is declared first
+    for key in ("SPECTRAL_NORM", "MEASUREMENT_GEOMETRY"):
+        used = next(i for i, ln in enumerate(lines) if ln.startswith(key + " "))
+        assert f'KEYWORD "{key}"' in lines[:used]
+    assert "KEYWORD" not in back.metadata
 
 
 def test_cgats_truncated(tmp_path):

@@ -56,6 +56,8 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
     if ms is not None:
         ms.spectrum(name)  # an unknown --sample names the file's samples
         R = ms.on_grid(model.wavelength_nm)[ms.names.index(name)]
+        if len(ms) > 1:
+            click.echo(f"matching sample {name!r} ({ms.names.index(name) + 1} of {len(ms)}; --sample chooses another)")
     differs = geometry_mismatch(ms.geometry, model.geometry) if ms is not None else None
     if differs:
         click.echo(f"warning: {differs}", err=True)

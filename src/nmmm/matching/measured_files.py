@@ -143,7 +143,8 @@ def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
                 raise DataFileError(f"{p.name}: line {no}: BEGIN_DATA before BEGIN_DATA_FORMAT; a CGATS file names its fields first")
             else:
                 key, _, val = ln.partition(" ")
-                keywords[key.upper()] = val.strip().strip('"')
+                if key.upper() != "KEYWORD":  # a declaration of the keyword that follows
+                    keywords[key.upper()] = val.strip().strip('"')
         elif state == "format":
             if ln.upper() == "END_DATA_FORMAT":
                 state = "between"
@@ -154,7 +155,8 @@ def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
                 state = "data"
             else:
                 key, _, val = ln.partition(" ")
-                keywords[key.upper()] = val.strip().strip('"')
+                if key.upper() != "KEYWORD":  # a declaration of the keyword that follows
+                    keywords[key.upper()] = val.strip().strip('"')
         elif state == "data":
             if ln.upper() == "END_DATA":
                 state = "done"
@@ -216,9 +218,9 @@ def write_cgats(path, spectra: MeasuredSpectra, originator: str = "nmmm") -> Pat
     w = spectra.wavelength_nm
     fields = ["SAMPLE_ID", "SAMPLE_NAME"] + [f"SPECTRAL_NM{x:g}" for x in w]
     out = ["CGATS.17", f'ORIGINATOR "{originator}"', 'DESCRIPTOR "reflectance factor"']
-    if spectra.geometry:
-        out.append(f'MEASUREMENT_GEOMETRY "{spectra.geometry}"')
-    out += ["SPECTRAL_NORM 1", f"NUMBER_OF_FIELDS {len(fields)}", "BEGIN_DATA_FORMAT", " ".join(fields), "END_DATA_FORMAT",
+    if spectra.geometry:  # keywords outside CGATS.17's reserved list are declared with KEYWORD before use
+        out += ['KEYWORD "MEASUREMENT_GEOMETRY"', f'MEASUREMENT_GEOMETRY "{spectra.geometry}"']
+    out += ['KEYWORD "SPECTRAL_NORM"', "SPECTRAL_NORM 1", f"NUMBER_OF_FIELDS {len(fields)}", "BEGIN_DATA_FORMAT", " ".join(fields), "END_DATA_FORMAT",
             f"NUMBER_OF_SETS {len(spectra)}", "BEGIN_DATA"]
     for i, (name, r) in enumerate(zip(spectra.names, spectra.reflectance), 1):
         safe = name.replace('"', "'")
