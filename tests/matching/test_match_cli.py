@@ -56,6 +56,9 @@ def test_calibrate_cli_on_the_shipped_ladder(tmp_path, capsys):
     assert main(["calibrate", str(EXAMPLES / "ladder.toml"), "-o", str(out)]) == 0
     said = capsys.readouterr().out
     assert "k_scale = 1.2" in said and "1:2 (left out)" in said
+    size = json.loads((out / "calibration.json").read_text())["values"]["size_scale"]
+    assert f"multiply pigments.0.diameter_nm by {size:.4g}" in said
+    assert "hematite is uniaxial" in said and "one isotropic n, k" in said
     got = json.loads((out / "calibration.json").read_text())
     assert abs(got["values"]["k_scale"] - 1.25) < 3 * got["standard_errors"]["k_scale"] + 1e-3
     assert got["de00_after"]["1:2"] <= 1.0 < got["de00_before"]["1:2"]

@@ -154,4 +154,26 @@ def calibrate(ladder, output, illuminant):
     for s in samples:
         click.echo(f"{s.name}{' (left out)' if s.name in left else ''}: dE00 {res.de00_before[s.name]:.2f} -> "
                    f"{res.de00_after[s.name]:.2f}")
+    for line in _calibration_instructions(samples, spec["compound"], res.values):
+        click.echo(line)
     click.echo(f"results: {out.resolve()}")
+
+
+def _calibration_instructions(samples, compound, values):
+    """What the calibrated material file does not carry, as recipe instructions: the grain-size
+    correction (a recipe key, not an optical constant) and a uniaxial compound's single n, k."""
+    keys, uniaxial = [], None
+    for s in samples:
+        raw = s.recipe if isinstance(s.recipe, dict) else {}
+        for i, pg in enumerate(raw.get("pigments") or []):
+            if pg.get("compound") == compound and "diameter_nm" in pg and f"pigments.{i}.diameter_nm" not in keys:
+                keys.append(f"pigments.{i}.diameter_nm")
+        uniaxial = uniaxial or ((raw.get("compounds") or {}).get(compound) or {}).get("uniaxial")
+    out = []
+    if "size_scale" in values and keys:
+        out.append(f"size: the calibrated file holds n, k only — in recipes using it, multiply {' and '.join(keys)} by "
+                   f"{values['size_scale']:.4g}")
+    if uniaxial:
+        out.append(f"note: {compound} is uniaxial ({' + '.join(uniaxial)}, mean index); the calibrated file is written "
+                   "as one isotropic n, k (use it with compound file = ..., not uniaxial = [...])")
+    return out
