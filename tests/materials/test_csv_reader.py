@@ -60,3 +60,20 @@ def test_no_regular_expressions_left_in_the_reader():
     import nmmm.materials.files as files
 
     assert not hasattr(files, "re")
+
+
+def test_uncertainty_columns_are_read_and_checked(tmp_path):
+    """The CSV nmmm ellipsometry writes (wavelength_nm,n,k,sigma_n,sigma_k) reads back with its uncertainties;
+    a negative uncertainty or an unknown fourth column is refused, never dropped."""
+    p = tmp_path / "m.csv"
+    p.write_text("wavelength_nm,n,k,sigma_n,sigma_k\n400,1.5,0.01,0.002,0.001\n500,1.49,0.0,0.003,0.0005\n")
+    m = read_csv(p)
+    np.testing.assert_array_equal(m.uncertainty["sigma_n"], [0.002, 0.003])
+    np.testing.assert_array_equal(m.uncertainty["sigma_k"], [0.001, 0.0005])
+    np.testing.assert_allclose(m.nk([400.0, 500.0]), [1.5 + 0.01j, 1.49])
+    p.write_text("wavelength_nm,n,k,sigma_n\n400,1.5,0.01,-0.002\n500,1.49,0.0,0.003\n")
+    with pytest.raises(DataFileError, match=r"sigma_n must be a finite standard uncertainty >= 0; got -0.002 at line 2"):
+        read_csv(p)
+    p.write_text("wavelength_nm,n,k,T\n400,1.5,0.01,0.9\n500,1.49,0.0,0.9\n")
+    with pytest.raises(DataFileError, match=r"column 4 \('T'\) is not one nmmm reads"):
+        read_csv(p)

@@ -166,8 +166,13 @@ def _table_lines(text: str, n_rows: int):
     return nums if len(nums) == n_rows else None
 
 
+#: optional columns after wavelength, n, k: standard uncertainties (as ``nmmm ellipsometry`` writes them)
+UNCERTAINTY_COLUMNS = ("sigma_n", "sigma_k")
+
+
 def read_csv(path: str | PathLike[str], name: str | None = None) -> TabulatedMaterial:
-    """Read a CSV of wavelength, n, k (unit declared in the header) as a Material."""
+    """Read a CSV of wavelength, n, k (unit declared in the header) as a Material; optional
+    :data:`UNCERTAINTY_COLUMNS` are checked and kept in ``material.uncertainty``."""
     import pandas as pd
 
     p = _existing(path)
@@ -191,9 +196,11 @@ def read_csv(path: str | PathLike[str], name: str | None = None) -> TabulatedMat
     if header[1] not in ("n",) or (len(header) > 2 and header[2] not in ("k",)):
         raise DataFileError(f"{p}: columns after the wavelength must be named 'n' and 'k'; got "
                             f"{_shown(','.join(first[1:]))}")
-    if len(header) > 3:
-        raise DataFileError(f"{p}: column 4 ({_shown(first[3])}) is not one nmmm reads: a material CSV has the "
-                            "columns wavelength, n and k; remove the others (nothing is dropped silently)")
+    for j, h in enumerate(header[3:], start=3):
+        if h not in UNCERTAINTY_COLUMNS or header.index(h) != j:
+            raise DataFileError(f"{p}: column {j + 1} ({_shown(first[j])}) is not one nmmm reads: a material CSV has "
+                                "the columns wavelength, n, k and optionally sigma_n, sigma_k; remove the others "
+                                "(nothing is dropped silently)")
     extra = (table.iloc[1:, len(header):] != "").to_numpy().any(axis=1)
     if extra.any():
         r = int(np.flatnonzero(extra)[0])
@@ -236,8 +243,15 @@ def read_csv(path: str | PathLike[str], name: str | None = None) -> TabulatedMat
         raise DataFileError(
             f"{p}: wavelengths must increase strictly; line {line(bad[0] + 2)} does not follow line {line(bad[0] + 1)}")
     check_nk_table(p, w, n, k, lines=[line(j + 1) for j in range(w.size)])
+    uncertainty = {h: arr[:, j] for j, h in enumerate(header) if h in UNCERTAINTY_COLUMNS} or None
+    for h, col in (uncertainty or {}).items():
+        bad = np.flatnonzero(~(np.isfinite(col) & (col >= 0)))
+        if bad.size:
+            raise DataFileError(f"{p}: {h} must be a finite standard uncertainty >= 0; got {col[bad[0]]:g} at line "
+                                f"{line(bad[0] + 1)}")
     try:
-        return TabulatedMaterial(name or meta.get("name", p.stem), w, n, k, reference=meta.get("reference", str(p)))
+        return TabulatedMaterial(name or meta.get("name", p.stem), w, n, k, reference=meta.get("reference", str(p)),
+                                 uncertainty=uncertainty)
     except InvalidInputError as exc:
         raise DataFileError(f"{p}: {exc}") from None
 

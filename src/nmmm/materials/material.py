@@ -183,7 +183,9 @@ def _intersect_ranges(materials) -> tuple[float, float]:
 class TabulatedMaterial(Material):
     """n and k tabulated at wavelength nodes, **interpolated linearly in wavelength**
     (n and k separately); outside the nodes an :class:`OutOfRangeError` is raised, or with
-    ``extrapolate=True`` the end values are held constant.
+    ``extrapolate=True`` the end values are held constant. ``uncertainty``: optional standard
+    uncertainties of the nodes, ``{"sigma_n": (N,), "sigma_k": (N,)}`` (as an ellipsometric inversion
+    gives them); carried along, not used by :meth:`nk`.
     """
 
     name: str
@@ -191,6 +193,7 @@ class TabulatedMaterial(Material):
     n_values: np.ndarray
     k_values: np.ndarray
     reference: str = ""
+    uncertainty: dict[str, np.ndarray] | None = field(default=None, compare=False)
 
     def __post_init__(self):
         w = np.asarray(self.wavelength_nm, dtype=float)
