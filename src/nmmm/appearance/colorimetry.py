@@ -8,15 +8,19 @@ which stays).
 import warnings
 
 from nmmm.colour import (  # noqa: F401  (re-exported)
+    DELTA_E_METHODS,
     MIN_CMF_COVERAGE,
     OBSERVERS,
     as_spectral_distributions,
+    delta_e,
     delta_e2000,
+    delta_lch,
     spectra_to_lab,
     spectra_to_srgb,
     spectra_to_xyz,
     weighting_factors,
     white_point,
+    within_tolerance,
     xyz_to_lab,
     xyz_to_srgb,
 )
@@ -27,15 +31,19 @@ warnings.warn(
     DeprecationWarning, stacklevel=2)
 
 __all__ = [
+    "DELTA_E_METHODS",
     "MIN_CMF_COVERAGE",
     "OBSERVERS",
     "as_spectral_distributions",
+    "delta_e",
     "delta_e2000",
+    "delta_lch",
     "spectra_to_lab",
     "spectra_to_srgb",
     "spectra_to_xyz",
     "weighting_factors",
     "white_point",
+    "within_tolerance",
     "xyz_to_lab",
     "xyz_to_srgb",
 ]

@@ -8,7 +8,8 @@
   Every spectra entry point also takes a ``colour.SpectralDistribution`` /
   ``MultiSpectralDistributions`` alone (``spectra_to_lab(sd)``).
 - :mod:`~nmmm.colour.cielab` — XYZ and spectra → CIELAB.
-- :mod:`~nmmm.colour.difference` — CIEDE2000 colour difference.
+- :mod:`~nmmm.colour.difference` — colour differences (ΔE*ab, ΔE94, CMC(l:c), ΔE00 with kL:kC:kH; registry
+  :data:`DELTA_E_METHODS`, :func:`delta_e`), ΔL*/ΔC*/ΔH*, pass/fail against a tolerance.
 - :mod:`~nmmm.colour.display` — XYZ and spectra → sRGB (CAT02 from the illuminant's white to D65).
 
 It depends only on :mod:`nmmm.errors`, :mod:`nmmm.spectra` and colour-science, so that
@@ -16,7 +17,7 @@ It depends only on :mod:`nmmm.errors`, :mod:`nmmm.spectra` and colour-science, s
 """
 
 from nmmm.colour.cielab import spectra_to_lab, xyz_to_lab
-from nmmm.colour.difference import delta_e2000
+from nmmm.colour.difference import DELTA_E_METHODS, delta_e, delta_e2000, delta_lch, within_tolerance
 from nmmm.colour.display import spectra_to_srgb, xyz_to_srgb
 from nmmm.colour.illuminants import OBSERVERS
 from nmmm.colour.tristimulus import (
@@ -28,15 +29,19 @@ from nmmm.colour.tristimulus import (
 )
 
 __all__ = [
+    "DELTA_E_METHODS",
     "MIN_CMF_COVERAGE",
     "OBSERVERS",
     "as_spectral_distributions",
+    "delta_e",
     "delta_e2000",
+    "delta_lch",
     "spectra_to_lab",
     "spectra_to_srgb",
     "spectra_to_xyz",
     "weighting_factors",
     "white_point",
+    "within_tolerance",
     "xyz_to_lab",
     "xyz_to_srgb",
 ]
