@@ -11,6 +11,8 @@ floor because only matching (and later calibration) consumes them.
 - :mod:`~nmmm.matching.recipe_match` — :func:`match_recipe` over a :class:`RecipeModel`.
 - :mod:`~nmmm.matching.calibration` — :func:`calibrate_colourant`: a compound's k scale
   (Kramers–Kronig-consistent n) and size scale fitted on a measured ladder.
+- :mod:`~nmmm.matching.colourant_selection` — :func:`select_colourants`: the best subsets of at most
+  N colourants of a palette (KM ranking of every subset, adding–doubling finish of the best).
 - :mod:`~nmmm.matching.batch_correction` — :func:`correct_batch`: additions that bring a made
   batch onto its target (offset held, the model's sensitivity at the recipe point).
 - :mod:`~nmmm.matching.outputs` — the ``nmmm match`` result folder.
@@ -18,6 +20,7 @@ floor because only matching (and later calibration) consumes them.
 
 from nmmm.matching.batch_correction import BatchCorrection, correct_batch
 from nmmm.matching.calibration import CalibrationResult, LadderSample, calibrate_colourant, write_calibrated_material
+from nmmm.matching.colourant_selection import SubsetMatch, select_colourants
 from nmmm.matching.measured_files import (
     MeasuredSpectra,
     cxf_geometries,
@@ -38,6 +41,7 @@ __all__ = [
     "MatchResult",
     "MeasuredSpectra",
     "RecipeModel",
+    "SubsetMatch",
     "calibrate_colourant",
     "correct_batch",
     "cxf_geometries",
@@ -50,6 +54,7 @@ __all__ = [
     "read_cxf",
     "read_measured",
     "read_spectra_csv",
+    "select_colourants",
     "write_calibrated_material",
     "write_cgats",
     "write_cxf",

@@ -40,8 +40,17 @@ def _target(target: str, unit: str, geometry, sample):
 @click.option("--sample", default=None, help="Which sample of a multi-sample file (default: the first).")
 @click.option("--geometry", default=None, help="Which geometry of a multi-angle CxF3 file.")
 @click.option("--percent", is_flag=True, help="The file's reflectances are in percent (0-100).")
+@click.option("--delta-e", "delta_e_method", default="CIE 2000", show_default=True, metavar="METHOD",
+              help="Reported colour difference (the fit stays on dE00): CIE 1976, CIE 1994[(textiles)], CMC[(l:c)], "
+                   "CIE 2000[(kL:kC:kH)]; aliases dE76, dE94, dE00, e.g. 'CMC(2:1)'.")
+@click.option("--tolerance", default=None, type=float, metavar="DE",
+              help="Pass/fail of the match: the reported difference (--delta-e) <= DE.")
 @click.option("--no-progress", is_flag=True)
-def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_weight, sample, geometry, percent, no_progress):
+@click.option("--max-colourants", default=None, type=int, metavar="N",
+              help="Colourant selection: the varied pigments.<i>.fraction keys are a palette; rank its subsets of at most "
+                   "N colourants (the others at fraction 0); matches.csv has one row per subset.")
+def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_weight, sample, geometry, percent, no_progress,
+          max_colourants=None, delta_e_method="CIE 2000", tolerance=None):
     """Match RECIPE's free keys (--vary) to TARGET: a CGATS.17 / CxF3 / CSV file, or lab:L,a,b."""
     import warnings
     from pathlib import Path
@@ -50,6 +59,7 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
     from nmmm.matching.outputs import write_match_outputs
     from nmmm.matching.recipe_match import IdentifiabilityWarning, RecipeModel, match_recipe
 
+    method, k, label = _delta_e_spec(delta_e_method, tolerance)
     ms, lab, name = _target(target, "percent" if percent else "auto", geometry, sample)
     model = RecipeModel(recipe, varies)
     R = None
@@ -63,16 +73,31 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
         click.echo(f"warning: {differs}", err=True)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = match_recipe(model, R, lab, mode=mode, illuminant=illuminant, test_illuminants=tests,
-                           metamerism_weight=metamerism_weight, progress=not no_progress)
+        if max_colourants is None:
+            res = match_recipe(model, R, lab, mode=mode, illuminant=illuminant, test_illuminants=tests,
+                               metamerism_weight=metamerism_weight, progress=not no_progress)
+        else:  # colourant selection: the best subset's match, its candidates one row per subset
+            from nmmm.matching.colourant_selection import select_colourants, subset_rows
+
+            sel = select_colourants(model, max_colourants, R, lab, mode=mode, illuminant=illuminant, test_illuminants=tests,
+                                    metamerism_weight=metamerism_weight, progress=not no_progress)
+            res = sel[0].result
+            res.candidates = subset_rows(sel, illuminant)
+            res.recipe_raw = model.matched_raw(list(sel[0].values.values()))
+            res.values = dict(sel[0].values)  # every palette key, the excluded ones at 0
+            click.echo(f"best of {len(sel)} subsets of at most {max_colourants}: {' + '.join(sel[0].colourants)}")
     for w in caught:  # an unidentifiable key is part of the result (stdout and report.md), others on stderr
         click.echo(f"warning: {w.message}", err=not issubclass(w.category, IdentifiabilityWarning))
     out = Path(output) if output else Path(f"match-{Path(recipe).stem}")
-    files = write_match_outputs(res, out, name)
+    difference = _difference(res, method, k, label, tolerance)
+    files = write_match_outputs(res, out, name, difference=difference)
     click.echo("  ".join(f"{k} = {v:.5g}" for k, v in res.values.items()))
     click.echo(f"dE00 = {res.de00:.4f} under {res.illuminant}; metamerism index "
                + (", ".join(f"{k} {v:.3f}" for k, v in res.metamerism.items()) or "n/a")
                + f"; {sum(res.evaluations.values())} model evaluations in {res.time_s:.1f} s")
+    if tolerance is not None or method != "CIE 2000" or k:
+        click.echo(f"{label} = {difference['value']:.4f} under {res.illuminant}" + (
+            "" if tolerance is None else f"; tolerance {tolerance:g}: {'pass' if difference['passes'] else 'FAIL'}"))
     click.echo(f"results: {files['matches'].parent.resolve()}")
 
 
@@ -177,3 +202,47 @@ def _calibration_instructions(samples, compound, values):
         out.append(f"note: {compound} is uniaxial ({' + '.join(uniaxial)}, mean index); the calibrated file is written "
                    "as one isotropic n, k (use it with compound file = ..., not uniaxial = [...])")
     return out
+
+
+def _delta_e_spec(text: str, tolerance: float | None) -> tuple[str, dict, str]:
+    """(method, parameters, label) of ``--delta-e`` (``CMC(2:1)``, ``dE00(2:1:1)``, ``dE94(textiles)``)."""
+    from nmmm.colour.difference import canonical_delta_e_method
+    from nmmm.errors import InvalidInputError
+
+    head, _, tail = text.strip().partition("(")
+    method = canonical_delta_e_method(head.strip())
+    args = [a.strip() for a in tail.rstrip(")").split(":")] if tail else []
+    names = {"CIE 1976": (), "CIE 1994": ("textiles",), "CMC": ("l", "c"), "CIE 2000": ("kL", "kC", "kH")}[method]
+    if method == "CIE 1994":
+        if args not in ([], ["textiles"], ["graphic arts"]):
+            raise InvalidInputError(f"--delta-e {text!r}: CIE 1994 takes (textiles) or (graphic arts)")
+        k = {"textiles": True} if args == ["textiles"] else {}
+    else:
+        try:
+            values = [float(a) for a in args]
+        except ValueError:
+            values = []
+        if args and (len(values) != len(names) or not all(v > 0 for v in values)):
+            raise InvalidInputError(f"--delta-e {text!r}: {method} takes ({':'.join(names)}) as numbers > 0 "
+                                    f"or none, e.g. {'CMC(2:1)' if method == 'CMC' else 'CIE 2000(2:1:1)'}")
+        k = dict(zip(names, values))
+    if tolerance is not None and not (tolerance > 0 and tolerance < float("inf")):
+        raise InvalidInputError(f"--tolerance {tolerance:g}: a colour-difference tolerance is a number > 0 (e.g. 1.0)")
+    label = {"CIE 1976": "dE*ab", "CIE 1994": "dE94", "CMC": "dE CMC", "CIE 2000": "dE00"}[method]
+    if k:
+        label += "(" + ":".join("textiles" if v is True else f"{v:g}" for v in k.values()) + ")"
+    elif method == "CMC":
+        label += "(2:1)"
+    return method, k, label
+
+
+def _difference(res, method: str, k: dict, label: str, tolerance: float | None) -> dict:
+    """The reported colour difference of the match against the target under its illuminant, with pass/fail."""
+    from nmmm.colour.difference import delta_e, delta_lch
+
+    value = float(delta_e(res.target_lab, res.lab, method, **k))
+    d = dict(method=method, parameters=k, label=label, value=value, illuminant=res.illuminant,
+             dL_dC_dH_ab=[float(v) for v in delta_lch(res.target_lab, res.lab)], tolerance=tolerance)
+    if tolerance is not None:
+        d["passes"] = value <= tolerance
+    return d
