@@ -39,8 +39,13 @@ def _plot(res, path: Path, target_name: str):
     plt.close(fig)
 
 
-def write_match_outputs(res, out_dir, target_name: str = "target", plots: bool = True) -> dict:
-    """Write the result folder (module docstring); returns ``{kind: path}`` of the final folder."""
+def write_match_outputs(res, out_dir, target_name: str = "target", plots: bool = True,
+                        difference: dict | None = None) -> dict:
+    """Write the result folder (module docstring); returns ``{kind: path}`` of the final folder.
+
+    ``difference``: the reported colour difference (``method``, ``value``, ``tolerance``, ``passes`` …),
+    written into match.json and report.md (the fit itself is on ΔE00).
+    """
     from nmmm.atomic_io import atomic_output_dir
     from nmmm.matching.measured_files import MeasuredSpectra, write_cgats
     from nmmm.recipes.run import _dump_toml
@@ -74,12 +79,15 @@ def write_match_outputs(res, out_dir, target_name: str = "target", plots: bool =
                        lab=[float(v) for v in res.lab], mode=res.mode, model_evaluations=res.evaluations, time_s=res.time_s,
                        standard_errors=res.standard_errors, active_bounds=res.active_bounds, warnings=res.warnings,
                        adding_doubling_nodes=res.quad_pts)
+        if difference is not None:
+            summary["difference"] = difference
         (tmp / names["json"]).write_text(json.dumps(summary, indent=1, default=float), encoding="utf-8")
         md = [f"# Match to {target_name}", "",
               f"- mode: {res.mode}; primary illuminant {res.illuminant}, CIE 1931 2°",
               f"- ΔE00 = {res.de00:.4f} (ΔL* {res.dlch[0]:+.3f}, ΔC* {res.dlch[1]:+.3f}, ΔH* {res.dlch[2]:+.3f})",
               "- metamerism index (CIE 15 change of illuminant, ΔE00, additive correction): "
               + (", ".join(f"{k} {v:.3f}" for k, v in res.metamerism.items()) or "— (CIELAB target)"),
+              *_difference_lines(difference),
               f"- spectral RMS: {res.spectral_rms:.5f}" if np.isfinite(res.spectral_rms) else "- spectral RMS: — (CIELAB target)",
               f"- model evaluations: {res.evaluations}; {res.time_s:.1f} s", "", "| key | value | σ (noise 0.002) |",
               "|---|---|---|"]
@@ -91,3 +99,14 @@ def write_match_outputs(res, out_dir, target_name: str = "target", plots: bool =
         if plots:
             _plot(res, tmp / names["plot"], target_name)
     return {k: out / v for k, v in names.items()}
+
+
+def _difference_lines(difference: dict | None) -> list[str]:
+    """report.md lines of the reported colour difference and its pass/fail (none without one)."""
+    if difference is None:
+        return []
+    line = f"- {difference['label']} = {difference['value']:.4f} under {difference['illuminant']}"
+    if difference.get("tolerance") is not None:
+        verdict = "**pass**" if difference["passes"] else "**fail**"
+        line += f"; tolerance {difference['tolerance']:g}: {verdict}"
+    return [line]
