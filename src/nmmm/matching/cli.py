@@ -85,6 +85,7 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
             res.candidates = subset_rows(sel, illuminant)
             res.recipe_raw = model.matched_raw(list(sel[0].values.values()))
             res.values = dict(sel[0].values)  # every palette key, the excluded ones at 0
+            res.evaluations = dict(model.evaluations)  # every subset's KM ranking and finish
             click.echo(f"best of {len(sel)} subsets of at most {max_colourants}: {' + '.join(sel[0].colourants)}")
     for w in caught:  # an unidentifiable key is part of the result (stdout and report.md), others on stderr
         click.echo(f"warning: {w.message}", err=not issubclass(w.category, IdentifiabilityWarning))
