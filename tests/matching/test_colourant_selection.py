@@ -86,3 +86,14 @@ def test_cli_max_colourants_writes_ranked_subsets(tmp_path, palette, capsys):
     assert main(args[:-3] + ["-o", str(tmp_path / "bad"), "--max-colourants", "5"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "choose 1 to 4" in err
+
+
+def test_cielab_target_ranks_single_colourants(palette):
+    from nmmm.colour import spectra_to_lab
+
+    m, target = palette
+    sel = select_colourants(m, 1, target_lab=spectra_to_lab(m.wavelength_nm, target))
+    assert len(sel) == 4 and all(len(s.colourants) == 1 for s in sel)
+    assert all(s.metamerism == {} for s in sel)  # no target spectrum: no metamerism index
+    assert sel[0].colourants == ("pigments.0.fraction",)  # only hematite makes a red
+    assert [s.stage for s in sel] == ["ad"] * 3 + ["km"]
