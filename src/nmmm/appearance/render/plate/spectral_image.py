@@ -86,12 +86,19 @@ class SpectralImage:
         ``"Display P3"`` (P3 primaries, D65, sRGB transfer curve), via colour-science; the
         lights' white is adapted to D65 (CAT02) and ``exposure`` = 1 maps a white diffuser
         to display white."""
-        import colour
-
         if colourspace == "sRGB":
             return self.to_srgb(exposure, clip)
         if colourspace not in ("Display P3",):
             raise InvalidInputError(f"colourspace must be 'sRGB' or 'Display P3', got {colourspace!r}")
+        rgb, _ = self._display_rgb(colourspace, exposure, encode=True)
+        return np.clip(rgb, 0.0, 1.0) if clip else rgb
+
+    def _display_rgb(self, colourspace: str, exposure: float, encode: bool) -> tuple[np.ndarray, np.ndarray]:
+        """RGB (H, W, 3) of ``colourspace`` at ``exposure`` (checked > 0), the lights' white adapted
+        to D65 (CAT02), transfer curve applied when ``encode``; and the exposed XYZ (display white
+        Y = 1) it came from. Shared by the display methods."""
+        import colour
+
         e = float(check_finite(exposure, "exposure"))
         if e <= 0:
             raise InvalidInputError(f"exposure must be > 0, got {exposure!r}")
@@ -100,8 +107,8 @@ class SpectralImage:
         xy_w = colour.XYZ_to_xy(white / white[1]) if white[1] > 0 else colour.CCS_ILLUMINANTS[
             "CIE 1931 2 Degree Standard Observer"]["D65"]
         rgb = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES[colourspace], illuminant=xy_w,
-                                chromatic_adaptation_transform="CAT02", apply_cctf_encoding=True)
-        return np.clip(rgb, 0.0, 1.0) if clip else rgb
+                                chromatic_adaptation_transform="CAT02", apply_cctf_encoding=encode)
+        return np.asarray(rgb, float), xyz
 
     def to_display(self, colourspace: str = "sRGB", exposure: float = 1.0, tone_map: str = "knee",
                    knee: float = TONE_MAP_KNEE, display_white_cd_m2: float = 120.0):
@@ -134,19 +141,11 @@ class SpectralImage:
         k = float(check_finite(knee, "knee"))
         if not 0 < k < 1:
             raise InvalidInputError(f"knee must lie in (0, 1) (a fraction of display white), got {knee!r}")
-        e = float(check_finite(exposure, "exposure"))
-        if e <= 0:
-            raise InvalidInputError(f"exposure must be > 0, got {exposure!r}")
+        rgb, xyz = self._display_rgb(colourspace, exposure, encode=False)
         dw = float(check_finite(display_white_cd_m2, "display_white_cd_m2"))
         if dw <= 0:
             raise InvalidInputError(f"display_white_cd_m2 must be > 0, got {display_white_cd_m2!r}")
-        white = self.white_xyz
-        xyz = self.to_xyz() / 100.0 * self.exposure_scale(e)
-        xy_w = colour.XYZ_to_xy(white / white[1]) if white[1] > 0 else colour.CCS_ILLUMINANTS[
-            "CIE 1931 2 Degree Standard Observer"]["D65"]
         space = colour.RGB_COLOURSPACES[colourspace]
-        rgb = np.asarray(colour.XYZ_to_RGB(xyz, space, illuminant=xy_w, chromatic_adaptation_transform="CAT02",
-                                           apply_cctf_encoding=False), float)
         rgb = np.clip(rgb, 0.0, None)
         over = np.any(rgb > 1.0 + WHITE_TOLERANCE, axis=-1)
         x = np.clip(xyz[..., 1], 0.0, None)
