@@ -126,6 +126,13 @@ def _scaled(values: np.ndarray, unit: str, where: str) -> np.ndarray:
 _SPECTRAL_FIELD = re.compile(r"^(?:SPECTRAL_NM_?|SPECTRAL_|NM_?|R_?)(\d+(?:\.\d+)?)$", re.IGNORECASE)
 
 
+def _cgats_keyword(line: str, keywords: dict[str, str]) -> None:
+    """Record a CGATS header line ``KEY value`` (value unquoted); ``KEYWORD "X"`` only declares X."""
+    key, _, val = line.partition(" ")
+    if key.upper() != "KEYWORD":
+        keywords[key.upper()] = val.strip().strip('"')
+
+
 def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
     """A CGATS.17 file's spectral fields (module docstring)."""
     p = Path(path)
@@ -142,9 +149,7 @@ def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
             elif ln.upper() == "BEGIN_DATA":
                 raise DataFileError(f"{p.name}: line {no}: BEGIN_DATA before BEGIN_DATA_FORMAT; a CGATS file names its fields first")
             else:
-                key, _, val = ln.partition(" ")
-                if key.upper() != "KEYWORD":  # a declaration of the keyword that follows
-                    keywords[key.upper()] = val.strip().strip('"')
+                _cgats_keyword(ln, keywords)
         elif state == "format":
             if ln.upper() == "END_DATA_FORMAT":
                 state = "between"
@@ -154,9 +159,7 @@ def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
             if ln.upper() == "BEGIN_DATA":
                 state = "data"
             else:
-                key, _, val = ln.partition(" ")
-                if key.upper() != "KEYWORD":  # a declaration of the keyword that follows
-                    keywords[key.upper()] = val.strip().strip('"')
+                _cgats_keyword(ln, keywords)
         elif state == "data":
             if ln.upper() == "END_DATA":
                 state = "done"
