@@ -3,23 +3,25 @@
 - :class:`LadderSample` — one measured sample: its recipe (raw dict or path) and its measured
   reflectance (on the recipe's grid).
 - :func:`calibrate_colourant` — fit what is uncertain about one compound, shared by every
-  sample: ``k_scale`` (its absorption k(λ) multiplied by s, with the index changed by the
-  Kramers–Kronig transform of the change, so n and k stay causal) and ``size_scale`` (the
+  sample: a smooth correction of its absorption, ``k_scale`` (k(λ) multiplied by s) and
+  ``k_legendre_1`` … ``k_legendre_3`` (Legendre coefficients of the change of ln k over the
+  calibration window, :mod:`nmmm.matching.k_correction`), with the index changed by the
+  Kramers–Kronig transform of the change of k so n and k stay causal; and ``size_scale`` (the
   diameters of every pigment of that compound multiplied by d). Returns a
   :class:`CalibrationResult` with the values, their standard errors, ΔE00 of each sample before
   and after, and of the samples left out of the fit.
 - :func:`write_calibrated_material` — the calibrated compound as a ``wavelength_nm,n,k`` CSV a
-  recipe can name (``[compounds.X] file = "…"``).
+  recipe can name (``[compounds.X] file = "…"``), with a header saying how it was made.
 
-Kramers–Kronig. With k' = s·k, the change Δk = (s − 1)·k implies Δn(λ) = (s − 1)·(n_KK[k](λ) − 1),
-n_KK the KK integral of k (:func:`nmmm.materials.kramers_kronig.n_from_k`, n_∞ = 1) over the
-calibration grid extended by 50 % on each side (k held at its end values): a linear, causal
-correction; the absorption outside that window is unchanged, which the data cannot see.
+The empirical (two-constant Kubelka–Munk, Duncan) calibration of the same ladder is
+:func:`nmmm.matching.empirical_km.calibrate_empirical`.
 
 Fit. ``scipy.optimize.least_squares`` (trf) on the stacked spectral residuals (percent) of the
 fitted samples, through the full physical model (Mie + adding–doubling of each sample's
-recipe); standard errors from σ̂²(JᵀJ)⁻¹ with σ̂² the residual variance. More unknowns than
-measured values is an error.
+recipe); standard errors from σ̂²(JᵀJ)⁻¹ with σ̂² the residual variance (JᵀJ from the
+finite-difference Jacobian at the solution). More unknowns than measured values, a parameter
+the ladder does not constrain (a zero column of J), samples whose recipes define the compound
+differently, or no fitted sample containing it are errors.
 
 References
 ----------
@@ -37,10 +39,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nmmm.errors import InvalidInputError
+from nmmm.matching.k_correction import K_LEGENDRE_TERMS, corrected_material_nk, kk_delta_n
 
-__all__ = ["LadderSample", "CalibrationResult", "calibrate_colourant", "write_calibrated_material", "CALIBRATION_PARAMETERS"]
+__all__ = ["LadderSample", "CalibrationResult", "calibrate_colourant", "write_calibrated_material", "CALIBRATION_PARAMETERS",
+           "DEFAULT_CALIBRATION_FIT"]
 
-CALIBRATION_PARAMETERS = ("k_scale", "size_scale")
+#: Every parameter a physical calibration can fit (a subset is chosen with ``fit=``).
+CALIBRATION_PARAMETERS = ("k_scale",) + K_LEGENDRE_TERMS + ("size_scale",)
+#: What ``calibrate_colourant`` fits unless told otherwise.
+DEFAULT_CALIBRATION_FIT = ("k_scale", "size_scale")
+_BOUNDS = {"k_scale": (0.2, 5.0), "size_scale": (0.3, 3.0), **{t: (-2.0, 2.0) for t in K_LEGENDRE_TERMS}}
+_START = {"k_scale": 1.0, "size_scale": 1.0, **{t: 0.0 for t in K_LEGENDRE_TERMS}}
 
 
 @dataclass(frozen=True)
@@ -64,6 +73,30 @@ class CalibrationResult:
     wavelength_nm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     nk: np.ndarray = field(default_factory=lambda: np.zeros(0))  # calibrated n + ik on the grid
     predicted: dict = field(default_factory=dict)  # sample -> calibrated spectrum
+    window_nm: tuple = (0.0, 0.0)  # the calibration window of the ln k correction
+    base_material: object = None  # the uncorrected compound (a Material)
+    covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of the fitted values, in fit order
+    illuminant: str = "D65"
+
+    @property
+    def correction(self) -> tuple[float, tuple]:
+        """(k_scale, Legendre coefficients) of the fitted k correction (1 and 0 where not fitted)."""
+        return _k_params(self.values)
+
+    def calibrated_nk(self, wavelength_nm) -> np.ndarray:
+        """The calibrated compound's n + ik at ``wavelength_nm`` (inside the calibration window)."""
+        if self.base_material is None:
+            raise InvalidInputError("this result carries no base compound; use .nk on .wavelength_nm")
+        w = np.asarray(wavelength_nm, float)
+        sk, coef = self.correction
+        return corrected_material_nk(self.base_material, w, self.window_nm, sk, coef)
+
+
+def _k_params(values: dict) -> tuple[float, tuple]:
+    coef = [float(values.get(t, 0.0)) for t in K_LEGENDRE_TERMS]
+    while coef and coef[-1] == 0.0:
+        coef.pop()
+    return float(values.get("k_scale", 1.0)), tuple(coef)
 
 
 class _Sample:
@@ -83,17 +116,22 @@ class _Sample:
             raise InvalidInputError(f"sample {s.name!r}: {R.size} measured values, its recipe's grid has {self.w.size}")
         self.R = R
         self.mats = build_materials(rec, self.w, progress=False)
-        self.nk0 = np.asarray(self.mats[compound].nk(self.w))
-        self.dn_per_s = _kk_delta_n(self.w, self.nk0.imag)
+        self.material = self.mats[compound]
+        self.nk0 = np.asarray(self.material.nk(self.w))
         pigs = rec.pigments if rec.pigments is not None else ([rec.pigment] if rec.pigment is not None else [])
+        if rec.coats is not None:
+            pigs = [p for c in rec.coats for p in c.pigments]
+        self.amount = sum(p.fraction for p in pigs if p.compound == compound)
         self.size_keys = [(f"pigments.{i}.diameter_nm", p.diameter_nm) for i, p in enumerate(pigs)
-                          if p.compound == compound and p.diameter_nm is not None]
+                          if p.compound == compound and p.diameter_nm is not None and rec.coats is None]
         self.compound = compound
+        self.window = (float(self.w[0]), float(self.w[-1]))
 
-    def nk(self, s_k):
-        return (self.nk0.real + (s_k - 1) * self.dn_per_s) + 1j * s_k * self.nk0.imag
+    def nk(self, s_k, coefficients=()):
+        """The corrected compound on the sample's grid (KK on a 5 nm grid of the base compound)."""
+        return corrected_material_nk(self.material, self.w, self.window, s_k, coefficients)
 
-    def reflectance(self, s_k, s_d):
+    def reflectance(self, s_k, s_d, coefficients=()):
         from nmmm.layers.coat_stack import stack_reflectance
         from nmmm.recipes.paint_stack import _solver, geometry_of, recipe_stack
         from nmmm.recipes.schema import parse_recipe, set_key
@@ -103,22 +141,37 @@ class _Sample:
             raw = set_key(raw, key, float(d) * s_d)
         rec = parse_recipe(raw, base_dir=self.base)
         mats = dict(self.mats)
-        mats[self.compound] = self.nk(s_k)
+        mats[self.compound] = self.nk(s_k, coefficients)
         stack = recipe_stack(rec, mats, self.w)
         return stack_reflectance(stack, self.w, _solver(rec), geometry_of(rec)).reflectance
 
 
 def _kk_delta_n(w, k):
-    """n_KK[k] − 1 on ``w``: KK of k over the grid extended by 50 % each side (module docstring)."""
-    from nmmm.materials.kramers_kronig import n_from_k
-
-    span = w[-1] - w[0]
-    fine = np.linspace(max(w[0] - 0.5 * span, 50.0), w[-1] + 0.5 * span, 600)
-    kf = np.interp(fine, w, k)
-    return np.interp(w, fine, np.asarray(n_from_k(kf, fine, n_inf=1.0)) - 1.0)
+    """n_KK[k] − 1 on ``w`` (kept for callers of the session-3 name; :func:`kk_delta_n`)."""
+    return kk_delta_n(w, k)
 
 
-def calibrate_colourant(samples, compound: str, fit=CALIBRATION_PARAMETERS, left_out=(), illuminant: str = "D65",
+def _check_ladder(prepared, used, compound, fit):
+    """Errors for a ladder the fit cannot use (module docstring)."""
+    ref = prepared[0]
+    window = (min(p.window[0] for p in prepared), max(p.window[1] for p in prepared))
+    for p in prepared[1:]:
+        lo, hi = max(p.w[0], ref.w[0]), min(p.w[-1], ref.w[-1])
+        probe = np.linspace(lo, hi, 7) if hi > lo else np.array([lo])
+        if not np.allclose(p.material.nk(probe), ref.material.nk(probe), rtol=1e-9, atol=1e-12):
+            raise InvalidInputError(f"sample {p.name!r} defines {compound!r} differently from sample {ref.name!r}: a shared "
+                                    f"calibration needs one base {compound!r} in every recipe (vary fractions, sizes of "
+                                    "other pigments, film or substrate — not the compound being calibrated)")
+    if not any(p.amount > 0 for p in used):
+        raise InvalidInputError(f"no fitted sample contains {compound!r} (its fractions are 0 in every one): the ladder "
+                                f"cannot tell anything about it — fit on samples with {compound!r} in them")
+    if "size_scale" in fit and not any(p.size_keys and p.amount > 0 for p in used):
+        raise InvalidInputError(f"size_scale: no fitted sample has a pigment of {compound!r} with diameter_nm "
+                                "(a [[pigments]] entry; sizes inside [[coats]] are not calibrated)")
+    return window
+
+
+def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, left_out=(), illuminant: str = "D65",
                         bounds=None) -> CalibrationResult:
     """Fit ``fit`` (a subset of :data:`CALIBRATION_PARAMETERS`) for ``compound`` on ``samples``
     except those named in ``left_out``, which are only predicted (module docstring)."""
@@ -128,8 +181,8 @@ def calibrate_colourant(samples, compound: str, fit=CALIBRATION_PARAMETERS, left
 
     fit = tuple(fit)
     bad = [f for f in fit if f not in CALIBRATION_PARAMETERS]
-    if bad or not fit:
-        raise InvalidInputError(f"fit must name some of {CALIBRATION_PARAMETERS}, got {fit!r}")
+    if bad or not fit or len(set(fit)) != len(fit):
+        raise InvalidInputError(f"fit must name some of {CALIBRATION_PARAMETERS} (each once), got {fit!r}")
     prepared = [_Sample(s, compound) for s in samples]
     names = [p.name for p in prepared]
     missing = [n for n in left_out if n not in names]
@@ -140,46 +193,81 @@ def calibrate_colourant(samples, compound: str, fit=CALIBRATION_PARAMETERS, left
     if not used or n_data <= len(fit):
         raise InvalidInputError(f"{len(fit)} unknowns from {n_data} measured values in {len(used)} fitted sample(s): "
                                 "more unknowns than data — measure more samples or fit fewer parameters")
-    if "size_scale" in fit and not any(p.size_keys for p in used):
-        raise InvalidInputError(f"size_scale: no fitted sample has a pigment of {compound!r} with diameter_nm")
-    lo = np.array([(bounds or {}).get(f, (0.2, 5.0) if f == "k_scale" else (0.3, 3.0))[0] for f in fit])
-    hi = np.array([(bounds or {}).get(f, (0.2, 5.0) if f == "k_scale" else (0.3, 3.0))[1] for f in fit])
+    window = _check_ladder(prepared, used, compound, fit)
+    for p in prepared:
+        p.window = window
+    bounds = bounds or {}
+    lo = np.array([bounds.get(f, _BOUNDS[f])[0] for f in fit])
+    hi = np.array([bounds.get(f, _BOUNDS[f])[1] for f in fit])
     count = [0]
     t0 = time.perf_counter()
 
     def params(x):
-        d = dict(zip(fit, x))
-        return d.get("k_scale", 1.0), d.get("size_scale", 1.0)
+        d = dict(zip(fit, (float(v) for v in x)))
+        sk, coef = _k_params(d)
+        return sk, d.get("size_scale", 1.0), coef
 
     def residuals(x):
         count[0] += 1
-        sk, sd = params(x)
-        return np.concatenate([(p.reflectance(sk, sd) - p.R) * 100 for p in used])
+        sk, sd, coef = params(x)
+        return np.concatenate([(p.reflectance(sk, sd, coef) - p.R) * 100 for p in used])
 
-    r = least_squares(residuals, np.ones(len(fit)), bounds=(lo, hi), method="trf", diff_step=1e-4, xtol=1e-8, ftol=1e-10)
+    x0 = np.clip([_START[f] for f in fit], lo, hi)
+    r = least_squares(residuals, x0, bounds=(lo, hi), method="trf", diff_step=1e-4, xtol=1e-8, ftol=1e-10)
+    col = np.linalg.norm(r.jac, axis=0)
+    if np.any(col <= 1e-9 * max(col.max(), 1e-300)):
+        dead = [f for f, c in zip(fit, col) if c <= 1e-9 * max(col.max(), 1e-300)]
+        raise InvalidInputError(f"the ladder does not constrain {dead}: the fitted samples' spectra do not change with it "
+                                "— drop it from fit or add samples that depend on it")
     dof = max(r.fun.size - len(fit), 1)
     s2 = float(np.sum(r.fun**2)) / dof
     try:
         cov = s2 * np.linalg.inv(r.jac.T @ r.jac)
-        se = {f: float(np.sqrt(max(cov[i, i], 0.0))) / 1.0 for i, f in enumerate(fit)}
+        se = {f: float(np.sqrt(max(cov[i, i], 0.0))) for i, f in enumerate(fit)}
     except np.linalg.LinAlgError:
+        cov = np.full((len(fit), len(fit)), np.inf)
         se = {f: float("inf") for f in fit}
-    sk, sd = params(r.x)
+    sk, sd, coef = params(r.x)
     before, after, pred = {}, {}, {}
     for p in prepared:
         lab_m = spectra_to_lab(p.w, np.clip(p.R, 0, None), illuminant)
         before[p.name] = float(delta_e2000(lab_m, spectra_to_lab(p.w, p.reflectance(1.0, 1.0), illuminant)))
-        pred[p.name] = p.reflectance(sk, sd)
+        pred[p.name] = p.reflectance(sk, sd, coef)
         after[p.name] = float(delta_e2000(lab_m, spectra_to_lab(p.w, pred[p.name], illuminant)))
     return CalibrationResult(compound, dict(zip(fit, (float(v) for v in r.x))), se, before, after, tuple(left_out), count[0],
-                             time.perf_counter() - t0, prepared[0].w, prepared[0].nk(sk), pred)
+                             time.perf_counter() - t0, prepared[0].w, prepared[0].nk(sk, coef), pred, window,
+                             prepared[0].material, cov, illuminant)
 
 
-def write_calibrated_material(result: CalibrationResult, path) -> "Path":  # noqa: F821
-    """The calibrated compound as ``wavelength_nm,n,k`` CSV (:func:`nmmm.materials.files.write_csv`)."""
-    from nmmm.materials.files import write_csv
-    from nmmm.materials.material import TabulatedMaterial
+def write_calibrated_material(result: CalibrationResult, path, step_nm: float | None = None, source: str = "") -> "Path":  # noqa: F821
+    """The calibrated compound as a ``wavelength_nm,n,k`` CSV (:func:`nmmm.materials.files.read_csv`
+    reads it), its header citing how it was made: the base compound, the correction, the fitted
+    values with their standard errors, the samples fitted and left out, ``source`` (e.g. the ladder
+    file). ``step_nm``: sample the calibration window at this step (the base compound evaluated
+    there, the smooth correction applied); default the calibration grid itself."""
+    from nmmm.atomic_io import atomic_write_text
 
-    m = TabulatedMaterial(f"{result.compound} (calibrated: {result.values})", result.wavelength_nm, result.nk.real,
-                          result.nk.imag, reference="nmmm.matching.calibration")
-    return write_csv(m, path, result.wavelength_nm)
+    if step_nm is not None and result.base_material is not None:
+        lo, hi = result.window_nm
+        w = np.unique(np.concatenate([np.arange(lo, hi + 1e-9, float(step_nm)), [hi]]))
+        nk = result.calibrated_nk(w)
+    else:
+        w, nk = result.wavelength_nm, result.nk
+    sk, coef = result.correction
+    fitted = [n for n in result.de00_after if n not in result.left_out]
+    base = getattr(result.base_material, "name", result.compound)
+    lines = [f"# name: {result.compound} (calibrated)",
+             f"# reference: nmmm.matching.calibrate_colourant{' on ' + source if source else ''}; base compound {base}",
+             "# method: k(λ) multiplied by s·exp(Σ c_j P_j(x)) (Legendre P_j, x = λ mapped onto [-1, 1] over "
+             f"{result.window_nm[0]:g}-{result.window_nm[1]:g} nm); n changed by the Kramers-Kronig transform of the change "
+             "of k (nmmm.matching.k_correction), so n and k stay causal",
+             "# fitted: " + ", ".join(f"{k} = {v:.6g} ± {result.standard_errors.get(k, float('nan')):.2g}"
+                                      for k, v in result.values.items()),
+             f"# samples fitted: {', '.join(fitted)}; left out: {', '.join(result.left_out) or 'none'}",
+             "# ΔE00 after (" + result.illuminant + "): " + ", ".join(f"{k} {v:.3f}" for k, v in result.de00_after.items())]
+    if "size_scale" in result.values:
+        lines.append(f"# grain size (not in this file): multiply the compound's diameter_nm by {result.values['size_scale']:.6g}")
+    lines.append(f"# k scale {sk:.6g}, Legendre coefficients {list(coef)}")
+    lines.append("wavelength_nm,n,k")
+    lines += [f"{x:.6g},{v.real:.8g},{max(v.imag, 0.0):.8g}" for x, v in zip(np.ravel(w), np.ravel(nk))]
+    return atomic_write_text(path, "\n".join(lines) + "\n")
