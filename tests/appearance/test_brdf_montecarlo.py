@@ -52,13 +52,15 @@ bounce operator of ``_Tables._ms_factor`` (now ``multiple_scattering_factor``) k
 scattering per pass and lost 20–40 % of the lossless light per bounce, which weighted ms/ms⁰ towards short,
 little-absorbed paths. It is now adding–doubling of the azimuth-averaged flake layer
 (exactly conservative when lossless); the albedo agrees to ≤ 0.004 (asserted:
-4 SE + 0.01). Still off: the *shape* of the multiply scattered light. The tracer's is
-brighter on the specular side, the model's lobe (1 − E⁰(θi))(1 − E⁰(θo)) has no
-azimuth dependence. Bin averages at θi = 45° (θo 60–80°, |φo| 0–60° / 60–120° /
-120–180°, 1/sr): τ = 1 MC 0.163 / 0.050 / 0.024, model 0.148 / 0.055 / 0.035 (−9 %,
-+9 %, +46 %); τ = 2 MC 0.198 / 0.057 / 0.023, model 0.172 / 0.065 / 0.043 (−13 %,
-+14 %, +86 %); bins within 20° of the normal agree to < 10 %. That comparison is
-``xfail(strict=True)`` with these numbers (nmmm.appearance.brdf, Notes).
+4 SE + 0.01). The *shape* of the multiply scattered light was off until the lobe got its
+azimuthal Fourier modes (``nmmm.appearance.brdf.ms_azimuth``: modes 1–6 of the multiply
+scattered part from adding–doubling per mode): the tracer's is brighter on the specular
+side. Bin averages at θi = 45° (θo 60–80°, |φo| 0–60° / 60–120° / 120–180°, 1/sr):
+τ = 1 MC 0.163 / 0.050 / 0.024, model without modes 0.148 / 0.055 / 0.035 (−9 %, +9 %,
++46 %), with modes 0.163 / 0.050 / 0.025; τ = 2 MC 0.198 / 0.057 / 0.023, without
+0.172 / 0.065 / 0.043 (−13 %, +14 %, +86 %), with 0.198 / 0.058 / 0.024. The comparison
+of every bin (``test_binned_brdf_matches_mc``, 4 SE + 10 %) was ``xfail(strict=True)``
+and now passes.
 """
 
 import numpy as np
@@ -315,11 +317,6 @@ def test_total_albedo_matches_mc(traces, tau):
         assert np.all(np.abs(a - r["albedo"]) < tol), (tau, th, a, r["albedo"])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "bin-averaged BRDF at θi = 45°: the model's multiple-scattering lobe has no azimuth dependence while the "
-    "traced one is peaked towards the specular side: θo 60–80°, |φo| 0–60° / 120–180°: τ = 1 model 0.148 / "
-    "0.035 vs MC 0.163 / 0.024 1/sr (−9 % / +46 %); τ = 2 model 0.172 / 0.043 vs MC 0.198 / 0.023 "
-    "(−13 % / +86 %); the albedo is right (test_total_albedo_matches_mc); see the nmmm.appearance.brdf Notes"))
 @pytest.mark.parametrize("tau", [1.0, 2.0])
 def test_binned_brdf_matches_mc(traces, tau):
     r = traces[tau, 45.0]

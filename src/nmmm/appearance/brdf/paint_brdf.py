@@ -12,6 +12,7 @@ import numpy as np
 from nmmm.appearance.brdf.clear_coat import ClearCoat
 from nmmm.appearance.brdf.fused_kernel import _nb
 from nmmm.appearance.brdf.interpolation import _deg, _lerp_table
+from nmmm.appearance.brdf.ms_azimuth import add_azimuth_modes
 from nmmm.appearance.brdf.tables import _Tables
 from nmmm.appearance.flakes import FlakeLayer, check_directions
 from nmmm.errors import InvalidInputError
@@ -112,6 +113,8 @@ class PaintBRDF:
         else:
             for s in range(0, wi.shape[0], _CHUNK):
                 out[s:s + _CHUNK] = tab.evaluate(wi[s:s + _CHUNK], wo[s:s + _CHUNK], comps)
+        if "multiple" in comps:
+            add_azimuth_modes(tab, wi, wo, out)
         if below is not None and below.any():
             out[below] = 0.0
         return out.reshape(shape + (tab.L,))
