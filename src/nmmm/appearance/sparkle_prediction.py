@@ -1,0 +1,278 @@
+"""Sparkle at the pixel footprint, predicted from the flake statistics.
+
+A pixel of a plate image integrates the flakes whose centres lie in its footprint on the
+plate (area A, mm²). A flake at normal m sends its mirror reflection of a light into the
+external direction f(m); the renderer spreads it over a normalised Gaussian lobe g
+(per sr, width σ_g = ``glint_spread_deg``: the source's angular size and the flakes'
+roughness, cut at 3σ_g) around f, so flake k adds X_k = K w_k g(∠(f_k, ωo)) to the pixel
+radiance, with K the same for all flakes of the pixel (irradiance, coat transmission in
+and out, flake reflectance, 1/(A cos θo)) and w_k = a_k exp(−τ_e S ζ_k) its own weight
+(area a_k, mean-field attenuation by the flakes above it, ζ_k its optical-depth fraction,
+S the path factor of :func:`nmmm.appearance.brdf.flake_list_reflection`).
+
+Flake centres form a stationary point process of density n_A (flakes / mm²) and their
+normals follow the tilt density p_m per sr (:class:`~nmmm.appearance.flakes.TiltDistribution`),
+so the mirror directions have the density per external sr
+
+    p_ω(ωo) = p_m(h') cos θo / (4 n² (ωi'·h') cos θo')
+
+(half-vector Jacobian 1/(4 ωi'·h') inside the binder of index n, refraction Jacobian
+cos θo / (n² cos θo')), h' the half vector of the refracted directions ωi', ωo'.
+The glinting flakes of a footprint are then a Poisson thinning of its flakes
+(compound Poisson: the count of flakes whose lobe reaches ωo is Poisson with mean
+λ = n_A A p_ω π (3σ_g)², each with an independent weight and lobe position), whence
+
+- mean radiance ⟨L⟩ = n_A ⟨w⟩ K p_ω — the statistical flake BRDF of
+  :class:`~nmmm.appearance.brdf.PaintBRDF` (its τ = n_A ⟨a⟩, its (1 − e^{−τ_e S})/(τ_e S)
+  the mean of e^{−τ_e S ζ});
+- per-pixel variance Var L = n_A A ⟨(K w g)²⟩ / A² → the relative variance
+
+      Var L / ⟨L⟩² = (⟨w²⟩ / ⟨w⟩²) / N,   N = n_A A p_ω Ω_g,   Ω_g = 1 / ∫ g² dω
+
+  N is the number of glinting flakes per pixel (the flakes whose mirror direction falls in
+  the lobe's effective solid angle Ω_g ≈ 4π σ_g²). Closer viewing (smaller A) gives fewer,
+  individually visible glints (large Var/⟨L⟩²); farther away they merge (N ≫ 1).
+
+:func:`glint_footprint_statistics` evaluates these per pixel. :func:`simulate_glint_pixels`
+draws pixel values from the same compound-Poisson law (no renderer, no flake positions),
+and :func:`predicted_sparkle` applies the definitions of :func:`nmmm.appearance.sparkle.
+sparkle_graininess` to such a statistical image (plus the analytic band-pass graininess
+:func:`predicted_graininess`): the sparkle and graininess predicted from flake size,
+number density, orientation and depth (issue 18 item 5).
+
+References
+----------
+- W. Jakob, M. Hašan, L.-Q. Yan, J. Lawrence, R. Ramamoorthi, S. Marschner, "Discrete
+  stochastic microfacet models", ACM TOG 33(4) (2014) — glint counts in a footprint.
+- D. Daley, D. Vere-Jones, An Introduction to the Theory of Point Processes, Springer 2003
+  — compound Poisson (Campbell) moments, independent thinning.
+- C. S. McCamy, Color Res. Appl. 23 (1998) 362 — micro appearance of metallic paints.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from nmmm.errors import InvalidInputError
+from nmmm.spectra import check_finite
+
+__all__ = ["GlintFootprintStatistics", "glint_footprint_statistics", "lobe_integrals", "simulate_glint_pixels",
+           "predicted_graininess", "predicted_sparkle", "variance_standard_error", "pixel_footprint_mm2"]
+
+#: the renderer's lobe cut (in units of σ_g)
+LOBE_CUT = 3.0
+
+
+@dataclass(frozen=True)
+class GlintFootprintStatistics:
+    """Per-pixel statistics of the glints (arrays of the pixels' shape).
+
+    ``glinting_flakes`` N (flakes whose mirror direction falls in the lobe's effective
+    solid angle), ``candidates`` λ (mean number of flakes whose cut lobe reaches the view),
+    ``relative_variance`` Var L / ⟨L⟩², ``weight_ratio`` ⟨w²⟩/⟨w⟩², ``mirror_density_per_sr``
+    p_ω, ``density_per_mm2`` n_A, ``footprint_mm2`` A, and the flake weights' samples
+    (``weights``, (N_flakes,) at each pixel's attenuation: (pixels, N_flakes) would be too
+    big, so the weights at the mean path factor) for :func:`simulate_glint_pixels`."""
+
+    glinting_flakes: np.ndarray
+    candidates: np.ndarray
+    relative_variance: np.ndarray
+    weight_ratio: np.ndarray
+    mirror_density_per_sr: np.ndarray
+    density_per_mm2: float
+    footprint_mm2: np.ndarray
+    lobe_sigma_rad: float
+    weights: np.ndarray
+    relative_fourth_cumulant: np.ndarray
+
+    def variance_error(self, n_pixels) -> np.ndarray:
+        """Predicted standard error of the relative variance estimated from ``n_pixels``
+        independent pixels: sqrt((κ4 + 2 σ⁴) / n) / ⟨L⟩² (κ4 = λ⟨X⁴⟩ for compound Poisson)."""
+        rv = np.asarray(self.relative_variance, float)
+        return np.sqrt((np.asarray(self.relative_fourth_cumulant, float) + 2 * rv * rv) / np.asarray(n_pixels, float))
+
+
+def _refract_in(v, n):
+    t = v[..., :2] / n
+    return np.concatenate([t, np.sqrt(np.clip(1 - np.sum(t * t, axis=-1, keepdims=True), 0, 1))], axis=-1)
+
+
+def _depth_fraction(flakes) -> np.ndarray:
+    """ζ_k: the optical depth above flake k over the layer's (the renderer's definition)."""
+    if hasattr(flakes, "optical_depth_above") and flakes.optical_depth > 0:
+        return np.asarray(flakes.optical_depth_above(), float) / flakes.optical_depth
+    top, bottom = flakes.layer_depth_nm
+    return np.clip((np.asarray(flakes.depth_nm, float) - top) / max(bottom - top, 1e-9), 0.0, 1.0)
+
+
+def lobe_integrals(sigma_rad: float, cut: float = LOBE_CUT) -> tuple[float, float, float]:
+    """(∫ g dω, ∫ g² dω, ∫ g⁴ dω) of the renderer's cut Gaussian lobe (small-angle, flat):
+    ∫ g^j dω = gnorm^j 2π σ² (1 − e^{−j c²/2}) / j."""
+    gnorm = 1.0 / (2 * math.pi * sigma_rad ** 2 * (1 - math.exp(-0.5 * cut * cut)))
+    g2 = gnorm ** 2 * math.pi * sigma_rad ** 2 * (1 - math.exp(-cut * cut))
+    g4 = gnorm ** 4 * 0.5 * math.pi * sigma_rad ** 2 * (1 - math.exp(-2 * cut * cut))
+    return 1.0, g2, g4
+
+
+def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_spread_deg: float = 1.0,
+                               wavelength_nm: float = 550.0) -> GlintFootprintStatistics:
+    """Predicted glint statistics of pixels whose footprint on the plate is ``footprint_mm2``.
+
+    Parameters
+    ----------
+    paint : PaintBRDF
+        The paint (coat index, flake layer: tilt density, optical depth, extinction).
+    flakes : FlakeList
+        The flake cell (number density, areas, depths); only its statistics are used.
+    wi, wo : (..., 3)
+        Unit directions to the light and to the viewer at each pixel's point.
+    footprint_mm2 : (...)
+        Area of each pixel's footprint on the plate (mm²).
+    glint_spread_deg : float
+        The renderer's lobe width σ_g (degrees).
+    """
+    sig = float(check_finite(glint_spread_deg, "glint_spread_deg"))
+    if not 0 < sig <= 20:
+        raise InvalidInputError(f"glint_spread_deg must lie in (0, 20] degrees, got {glint_spread_deg!r}")
+    if paint.flakes is None:
+        raise InvalidInputError("paint has no flake layer: a sparkle prediction needs flakes")
+    wi = check_finite(wi, "wi").astype(float)
+    wo = check_finite(wo, "wo").astype(float)
+    A = check_finite(footprint_mm2, "footprint_mm2").astype(float)
+    if np.any(A <= 0):
+        raise InvalidInputError("footprint_mm2 must be > 0 (the pixel's area on the plate)")
+    wi, wo = np.broadcast_arrays(wi, wo)
+    tab = paint.prepare(np.array([float(wavelength_nm)]))
+    n = float(tab.n)
+    tilt = paint.flakes.tilt
+    ip = _refract_in(wi, n)
+    op = _refract_in(wo, n)
+    h = ip + op
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    ih = np.clip(np.sum(ip * h, axis=-1), 1e-9, 1.0)
+    p_m = tilt.pdf(h[..., 2])
+    p_w = p_m * wo[..., 2] / (4 * n * n * ih * np.maximum(op[..., 2], 1e-9))
+    cw, chh = flakes.region_nm
+    n_a = len(flakes) / (cw * chh * 1e-12)
+    s = math.radians(sig)
+    _, g2, g4 = lobe_integrals(s)
+    N = n_a * A * p_w / g2
+    lam = n_a * A * p_w * math.pi * (LOBE_CUT * s) ** 2
+    # weights a_k exp(-τ_e S ζ_k) at each pixel's path factor S
+    a = np.asarray(flakes.areas_nm2, float) * 1e-12
+    zeta = _depth_fraction(flakes)
+    tau_e = float(np.mean(tab.tau_e))
+    mu_g = np.linspace(0.05, 1.0, 96)
+    a_g = np.asarray(tilt.projected_mean(mu_g), float)
+    S = np.interp(ip[..., 2], mu_g, a_g) / ip[..., 2] + np.interp(op[..., 2], mu_g, a_g) / op[..., 2]
+    # moments over the flakes: Σ a e^{-x ζ}, Σ a² e^{-2 x ζ} on a grid of x = τ_e S
+    x = tau_e * S
+    xs = np.linspace(float(x.min()), float(x.max()), 33) if x.size else np.zeros(1)
+    m1 = np.array([np.mean(a * np.exp(-v * zeta)) for v in xs])
+    m2 = np.array([np.mean((a * np.exp(-v * zeta)) ** 2) for v in xs])
+    m4 = np.array([np.mean((a * np.exp(-v * zeta)) ** 4) for v in xs])
+    ratio = np.interp(x, xs, m2 / m1 ** 2)
+    ratio4 = np.interp(x, xs, m4 / m1 ** 4)
+    dens = n_a * A * p_w  # flakes per pixel per sr of mirror directions
+    with np.errstate(divide="ignore"):
+        rel = np.where(N > 0, ratio / N, np.inf)
+        k4 = np.where(dens > 0, ratio4 * g4 / dens ** 3, np.inf)
+    weights = a * np.exp(-float(np.mean(x)) * zeta)
+    return GlintFootprintStatistics(N, lam, rel, ratio, p_w, float(n_a), A, s, weights, k4)
+
+
+def simulate_glint_pixels(mean, stats: GlintFootprintStatistics, rng=None) -> np.ndarray:
+    """Pixel values drawn from the compound-Poisson law of ``stats`` with mean ``mean``
+    (same shape): Poisson(λ) flakes per pixel, each with a weight drawn from the flake
+    cell's weights and a lobe position uniform over the cut disc (g ∝ exp(−r²/2σ²),
+    r² uniform on [0, (3σ)²])."""
+    rng = np.random.default_rng(rng)
+    mean = np.asarray(mean, float)
+    lam = np.broadcast_to(stats.candidates, mean.shape)
+    k = rng.poisson(lam)
+    tot = int(k.sum())
+    w = rng.choice(stats.weights, size=tot)
+    c2 = LOBE_CUT ** 2
+    g = np.exp(-0.5 * c2 * rng.random(tot))
+    mean_g = (1 - math.exp(-0.5 * c2)) / (0.5 * c2)
+    pix = np.repeat(np.arange(k.size), k.ravel())
+    sums = np.bincount(pix, weights=w * g, minlength=k.size).reshape(mean.shape)
+    unit = lam * float(np.mean(stats.weights)) * mean_g
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(unit > 0, mean * sums / unit, 0.0)
+
+
+def variance_standard_error(x) -> tuple[float, float]:
+    """Sample variance of ``x`` and its standard error sqrt((m4 − s⁴)/n) (any distribution:
+    the fourth central moment m4 carries the compound-Poisson tail)."""
+    x = np.asarray(x, float).ravel()
+    if x.size < 4:
+        raise InvalidInputError("need at least 4 values to estimate a variance and its error")
+    d = x - x.mean()
+    s2 = float(np.mean(d * d)) * x.size / (x.size - 1)
+    m4 = float(np.mean(d ** 4))
+    return s2, math.sqrt(max(m4 - s2 * s2, 0.0) / x.size)
+
+
+def _band_kernel_norm2(pixel_size_um, acuity_um, background_um, size=None):
+    """Σ k² of the graininess band-pass (acuity − background Gaussians) of
+    :func:`~nmmm.appearance.sparkle.sparkle_graininess`, for independent pixels."""
+    from scipy import ndimage
+
+    sb = background_um / pixel_size_um / 2.0
+    m = int(size or (2 * int(4 * sb + 1) + 1))
+    d = np.zeros((m, m))
+    d[m // 2, m // 2] = 1.0
+    k = (ndimage.gaussian_filter(d, acuity_um / pixel_size_um / 2.0, mode="constant")
+         - ndimage.gaussian_filter(d, sb, mode="constant"))
+    return float(np.sum(k * k))
+
+
+def predicted_graininess(smooth, glint_mean, stats: GlintFootprintStatistics, pixel_size_um: float,
+                         acuity_um: float = 50.0, background_um: float = 500.0) -> float:
+    """Graininess G (definition of :func:`~nmmm.appearance.sparkle.sparkle_graininess`)
+    predicted for an image whose pixels have mean ``smooth + glint_mean`` and independent
+    glint noise of variance ``relative_variance · glint_mean²``:
+    G² = (⟨Var⟩ Σ k² + Var(k ∗ mean)) / ⟨mean⟩², k the band-pass kernel."""
+    from scipy import ndimage
+
+    mu = np.asarray(smooth, float) + np.asarray(glint_mean, float)
+    var = np.asarray(stats.relative_variance, float) * np.asarray(glint_mean, float) ** 2
+    ps = float(pixel_size_um)
+    band = (ndimage.gaussian_filter(mu, acuity_um / ps / 2.0, mode="reflect")
+            - ndimage.gaussian_filter(mu, background_um / ps / 2.0, mode="reflect"))
+    g2 = (float(np.mean(var)) * _band_kernel_norm2(ps, acuity_um, background_um) + float(band.var())) / float(mu.mean()) ** 2
+    return math.sqrt(g2)
+
+
+def predicted_sparkle(smooth, glint_mean, stats: GlintFootprintStatistics, pixel_size_um: float, rng=0,
+                      **kwargs):
+    """:class:`~nmmm.appearance.sparkle.SparkleMetrics` of a statistical image — ``smooth``
+    plus glints drawn by :func:`simulate_glint_pixels` — with the definitions of
+    :func:`~nmmm.appearance.sparkle.sparkle_graininess` (``kwargs`` go there)."""
+    from nmmm.appearance.sparkle import sparkle_graininess
+
+    img = np.asarray(smooth, float) + simulate_glint_pixels(glint_mean, stats, rng)
+    return sparkle_graininess(img, pixel_size_um, **kwargs)
+
+
+def pixel_footprint_mm2(camera) -> tuple[np.ndarray, np.ndarray]:
+    """Footprint areas (H, W) in mm² of a pinhole camera's pixels on the plate z = 0 (the
+    quadrilateral of its four corner rays, by its diagonals' cross product) and the pixel
+    centres' points (H, W, 3) on the plate."""
+    W, H = camera.resolution
+    c = np.asarray(camera.position_mm, float)
+
+    def hit(rows, cols):
+        d = camera.pixel_directions(rows, cols)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return c - d * (c[2] / d[..., 2])[..., None]
+
+    P = hit(np.arange(H, dtype=float), np.arange(W, dtype=float))
+    Pc = hit(np.arange(H + 1) - 0.5, np.arange(W + 1) - 0.5)
+    a = Pc[1:, 1:] - Pc[:-1, :-1]
+    b = Pc[:-1, 1:] - Pc[1:, :-1]
+    return 0.5 * np.abs(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]), P

@@ -1,0 +1,108 @@
+"""Sparkle at the pixel footprint (issue 19 item 3): the pixel-to-pixel variance of the
+rendered glints, region by region, equals the compound-Poisson variance that the flake
+statistics predict for each pixel's footprint (nmmm.appearance.sparkle_prediction:
+number density, areas, depths, tilt density, coat index, lobe width — no flake positions,
+no renderer code), at two viewing distances.
+
+Tolerance: the sampling error of a variance estimate from n independent pixels is
+sqrt((κ4 + 2σ⁴)/n), κ4 the fourth cumulant of the pixel value (compound Poisson:
+κ4 = λ⟨X⁴⟩, predicted too); each region must agree within 4 of its standard errors and
+the regions pooled within 3 pooled standard errors. The mean (the statistical BRDF) is
+checked region by region the same way (standard error sqrt(σ²/n)).
+"""
+
+import numpy as np
+import pytest
+
+from nmmm.appearance.render import PinholeCamera, PointLight, render_plate, seed_metallic_plate
+from nmmm.appearance.sparkle_prediction import (
+    glint_footprint_statistics,
+    pixel_footprint_mm2,
+    variance_standard_error,
+)
+
+W550 = np.array([550.0])
+
+
+@pytest.fixture(scope="module")
+def plate():
+    return seed_metallic_plate(cells=(300, 200), rng=0)  # 13.5 cm x 9 cm
+
+
+def _glints_over_model(plate, cam, light, spread=1.0):
+    img = render_plate(plate, cam, light, wavelength_nm=W550, glint_spread_deg=spread)
+    A, P = pixel_footprint_mm2(cam)
+    H, Wd = A.shape
+    wo = np.asarray(cam.position_mm) - P
+    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
+    v = np.asarray(light.position_mm) - P
+    r = np.linalg.norm(v, axis=-1)
+    wi = v / r[..., None]
+    E = wi[..., 2] / (r * 1e-3) ** 2
+    brdf = plate.smooth_brdf
+    ev = lambda comps: brdf.evaluate(W550, wi.reshape(-1, 3), wo.reshape(-1, 3), components=comps)[:, 0].reshape(H, Wd) * E
+    smooth = ev(("specular", "base", "multiple"))
+    stat = ev(("flakes",))
+    z = (img.radiance[..., 0] - smooth) / stat  # glints relative to the statistical BRDF
+    st = glint_footprint_statistics(brdf, plate.flakes, wi, wo, A, glint_spread_deg=spread)
+    return z, img.on_plate, st
+
+
+def _regions(on, nb=4):
+    H, W = on.shape
+    for bi in range(nb):
+        for bj in range(nb):
+            sl = (slice(bi * H // nb, (bi + 1) * H // nb), slice(bj * W // nb, (bj + 1) * W // nb))
+            m = np.zeros_like(on)
+            m[sl] = True
+            m &= on
+            if m.sum() > 400:
+                yield m
+
+
+@pytest.mark.parametrize("distance_mm, fov_deg", [(150.0, 12.0), (600.0, 12.0)])
+def test_pixel_variance_equals_compound_poisson_prediction(plate, distance_mm, fov_deg):
+    # camera at 30° from the normal, a point light at 40° on the other side, close: the
+    # aspecular angle and the irradiance change across the view, so the predicted
+    # variance changes from region to region
+    light = PointLight((0.0, 80.0, 100.0), 1.0, intensity=1.0)
+    t = np.radians(30.0)
+    cam = PinholeCamera((0.0, -distance_mm * np.sin(t), distance_mm * np.cos(t)), (0.0, 0.0, 0.0),
+                        fov_deg=fov_deg, resolution=(240, 160))
+    z, on, st = _glints_over_model(plate, cam, light)
+    dev, err, pred_all = [], [], []
+    for m in _regions(on):
+        n = int(m.sum())
+        s2, _ = variance_standard_error(z[m])
+        pred = float(st.relative_variance[m].mean())
+        se = float(st.variance_error(n)[m].mean())
+        assert abs(s2 - pred) < 4 * se, (s2, pred, se, n)
+        # the mean: the statistical BRDF (standard error of a mean of n pixels)
+        assert abs(z[m].mean() - 1.0) < 4 * np.sqrt(pred / n), (z[m].mean(), pred, n)
+        dev.append(s2 - pred)
+        err.append(se)
+        pred_all.append(pred)
+    assert len(dev) >= 12
+    assert abs(np.sum(dev)) < 3 * np.sqrt(np.sum(np.square(err))), (dev, err)
+    # the prediction does change across the view (region by region is a real test)
+    assert max(pred_all) / min(pred_all) > 1.05
+
+
+def test_closer_viewer_sees_fewer_brighter_glints(plate):
+    """Same camera direction, 4× closer with the same field of view: footprints 16× smaller,
+    16× fewer glinting flakes per pixel and 16× the relative variance, as predicted."""
+    light = PointLight((0.0, 80.0, 100.0), 1.0, intensity=1.0)
+    t = np.radians(30.0)
+    out = {}
+    for d in (150.0, 600.0):
+        cam = PinholeCamera((0.0, -d * np.sin(t), d * np.cos(t)), (0.0, 0.0, 0.0), fov_deg=3.0,
+                            resolution=(120, 80))
+        z, on, st = _glints_over_model(plate, cam, light)
+        n = int(on.sum())
+        out[d] = (variance_standard_error(z[on])[0], float(st.relative_variance[on].mean()),
+                  float(st.glinting_flakes[on].mean()), float(st.variance_error(n)[on].mean()))
+    near, far = out[150.0], out[600.0]
+    assert near[2] < 1.0 < far[2]  # near: under one glinting flake per pixel (individual glints); far: several
+    for s2, pred, _, se in (near, far):
+        assert abs(s2 - pred) < 4 * se, (near, far)
+    assert near[1] / far[1] > 10 and near[0] / far[0] > 8
