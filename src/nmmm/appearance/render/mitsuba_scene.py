@@ -32,7 +32,7 @@ from nmmm.appearance.render.lights import DirectionalLight, PointLight, UniformE
 from nmmm.appearance.render.mitsuba_paint import paint_bsdf, register_nmmm_plugins, require_mitsuba
 from nmmm.errors import InvalidInputError
 
-__all__ = ["scene_dict", "render_object", "SHAPES"]
+__all__ = ["scene_dict", "render_object", "SHAPES", "SAMPLERS"]
 
 SHAPES = ("sphere", "panel", "plate")
 
@@ -70,7 +70,11 @@ def _panel_mesh(mi, width_mm=120.0, height_mm=80.0, radius_mm=150.0, n=64):
     return mesh
 
 
-def _sensors(mi, position_mm, look_at_mm, up, fov_deg, resolution, spp, wavelength_nm, stereo, interocular_mm):
+SAMPLERS = ("independent", "stratified", "multijitter", "ldsampler", "orthogonal")
+
+
+def _sensors(mi, position_mm, look_at_mm, up, fov_deg, resolution, spp, wavelength_nm, stereo, interocular_mm,
+             sampler="independent"):
     w = np.asarray(wavelength_nm, float)
     # box bands around each wavelength, clipped to the grid's ends (lights' SPDs may stop there)
     edges = np.r_[w[0], 0.5 * (w[1:] + w[:-1]), w[-1]] if w.size > 1 else np.r_[w[0] - 2.5, w[0] + 2.5]
@@ -106,7 +110,7 @@ def _sensors(mi, position_mm, look_at_mm, up, fov_deg, resolution, spp, waveleng
                                                        up=[float(v) for v in up]),
             "film": {"type": "specfilm", "width": int(resolution[0]), "height": int(resolution[1]),
                      "rfilter": {"type": "box"}, **bands},
-            "sampler": {"type": "independent", "sample_count": int(spp)},
+            "sampler": {"type": sampler, "sample_count": int(spp)},
         })
     return out, dl
 
@@ -114,20 +118,26 @@ def _sensors(mi, position_mm, look_at_mm, up, fov_deg, resolution, spp, waveleng
 def scene_dict(brdf, shape: str = "sphere", lights=(), environment=None, position_mm=(0.0, -150.0, 400.0),
                look_at_mm=(0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0), fov_deg: float = 30.0, resolution=(256, 256),
                spp: int = 64, wavelength_nm=None, stereo: bool = False, interocular_mm: float = 65.0,
-               plate_size_mm=(150.0, 100.0), max_depth: int = 4, variant: str = "llvm_ad_spectral"):
+               plate_size_mm=(150.0, 100.0), max_depth: int = 4, variant: str = "llvm_ad_spectral",
+               sampler: str = "independent", table=None):
     """Mitsuba scene dictionary of a painted ``shape`` (``"sphere"``: radius 50 mm at the
     origin; ``"panel"``: a 120 × 80 mm cylindrical panel of radius 150 mm facing +z;
-    ``"plate"``: a flat ``plate_size_mm`` rectangle in z = 0 facing +z). Returns
-    ``(scene_dict, band_widths_nm, n_sensors)``."""
+    ``"plate"``: a flat ``plate_size_mm`` rectangle in z = 0 facing +z). ``sampler``: one of
+    :data:`SAMPLERS` (Mitsuba's sampler plugins; ``"ldsampler"`` converges faster than
+    ``"independent"``); ``table``: keyword arguments of
+    :func:`~nmmm.appearance.render.mitsuba_paint.paint_table` (table resolution, rank).
+    Returns ``(scene_dict, band_widths_nm, n_sensors)``."""
     mi = require_mitsuba(variant)
     register_nmmm_plugins(mi)
     if shape not in SHAPES:
         raise InvalidInputError(f"unknown shape {shape!r}; choose among {SHAPES}")
+    if sampler not in SAMPLERS:
+        raise InvalidInputError(f"unknown Mitsuba sampler {sampler!r}; choose among {SAMPLERS}")
     if isinstance(lights, (DirectionalLight, PointLight)):
         lights = (lights,)
     w = default_wavelengths() if wavelength_nm is None else np.asarray(wavelength_nm, float).ravel()
     d = {"type": "scene", "integrator": {"type": "path", "max_depth": int(max_depth)}}
-    bsdf = paint_bsdf(brdf, wavelength_nm=w)
+    bsdf = paint_bsdf(brdf, wavelength_nm=w, **dict(table or {}))
     if shape == "sphere":
         d["object"] = {"type": "sphere", "center": [0.0, 0.0, 0.0], "radius": 50.0, "bsdf": bsdf}
     elif shape == "panel":
@@ -164,7 +174,8 @@ def scene_dict(brdf, shape: str = "sphere", lights=(), environment=None, positio
                                     "radiance map on the wavelength grid (see mitsuba_envmap.latlong_environment)")
     if not lights and environment is None:
         raise InvalidInputError("no light: give at least one light or an environment")
-    sensors, dl = _sensors(mi, position_mm, look_at_mm, up, fov_deg, resolution, spp, w, stereo, interocular_mm)
+    sensors, dl = _sensors(mi, position_mm, look_at_mm, up, fov_deg, resolution, spp, w, stereo, interocular_mm,
+                           sampler)
     for k, s in enumerate(sensors):
         d[f"sensor{k}"] = s
     return d, dl, len(sensors)
@@ -184,12 +195,12 @@ def render_object(brdf, shape: str = "sphere", lights=(), environment=None, dist
                   elevation_deg: float = 25.0, fov_deg: float = 30.0, resolution=(256, 256), spp: int = 64,
                   stereo: bool = False, interocular_mm: float = 65.0, wavelength_nm=None, seed: int = 0,
                   position_mm=None, look_at_mm=(0.0, 0.0, 0.0), plate_size_mm=(150.0, 100.0),
-                  variant: str = "llvm_ad_spectral"):
+                  variant: str = "llvm_ad_spectral", sampler: str = "independent", table=None):
     """Render ``shape`` painted with ``brdf`` through Mitsuba 3 (``llvm_ad_spectral``).
 
     The camera sits at ``distance_mm`` from ``look_at_mm`` at ``elevation_deg`` above the
     xy-plane on the −y side (or at ``position_mm``); image up is +z (+y when looking along z).
-    Returns a list of
+    ``sampler`` and ``table`` as in :func:`scene_dict`. Returns a list of
     :class:`~nmmm.appearance.render.plate.SpectralImage` (left, right for ``stereo``):
     band values divided by the band width are the mean spectral radiance per band.
     """
@@ -203,7 +214,8 @@ def render_object(brdf, shape: str = "sphere", lights=(), environment=None, dist
     f = np.asarray(look_at_mm, float) - np.asarray(position_mm, float)
     up = (0.0, 0.0, 1.0) if np.linalg.norm(np.cross(f / np.linalg.norm(f), [0.0, 0.0, 1.0])) > 1e-3 else (0.0, 1.0, 0.0)
     d, dl, ns = scene_dict(brdf, shape, lights, environment, position_mm, look_at_mm, up, fov_deg,
-                           resolution, spp, w, stereo, interocular_mm, plate_size_mm, variant=variant)
+                           resolution, spp, w, stereo, interocular_mm, plate_size_mm, variant=variant,
+                           sampler=sampler, table=table)
     scene = mi.load_dict(d)
     if isinstance(lights, (DirectionalLight, PointLight)):
         lights = (lights,)

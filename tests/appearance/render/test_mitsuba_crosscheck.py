@@ -1,0 +1,67 @@
+"""Issue 19 item 5: nmmm's plate renderer against Mitsuba 3 (an independent Monte-Carlo renderer)
+with the ``nmmm_paint`` BSDF, region by region (3 x 3 regions of the plate), for the shipped solid
+hematite recipe and the grey metallic recipe's statistical flake BRDF (no glints), under a point
+lamp and a uniform D65 sky. Skipped without Mitsuba 3 / libLLVM >= 17."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nmmm.appearance.render import PointLight, UniformEnvironment
+
+EXAMPLES = Path(__file__).resolve().parents[3] / "src" / "nmmm" / "recipes" / "examples"
+W = np.arange(400.0, 701.0, 20.0)
+
+
+def _mitsuba():
+    try:
+        from nmmm.appearance.render.mitsuba_paint import require_mitsuba
+
+        return require_mitsuba("llvm_ad_spectral")
+    except Exception as exc:  # noqa: BLE001
+        pytest.skip(f"Mitsuba unavailable: {exc}")
+
+
+def _recipe_brdf(name):
+    from nmmm.recipes.render_cli import plate_from_recipe_file
+
+    plate, _ = plate_from_recipe_file(EXAMPLES / name)
+    return plate.brdf  # the statistical BRDF (flakes averaged) for an effect paint
+
+
+@pytest.mark.parametrize("recipe", ["hematite_paint.toml", "grey_metallic.toml"])
+def test_plate_regions_match_mitsuba(recipe):
+    _mitsuba()
+    from nmmm.appearance.render.mitsuba_crosscheck import crosscheck_plate
+
+    brdf = _recipe_brdf(recipe)
+    lamp = PointLight((0.0, 150.0, 300.0), "D65", 1.0)
+    sky = UniformEnvironment("D65", 0.1)
+    cc = crosscheck_plate(brdf, [lamp], sky, position_mm=(0.0, -250.0, 300.0), fov_deg=35, resolution=(48, 32),
+                          spp=1024, wavelength_nm=W, grid=(3, 3))
+    print(cc.table())
+    # Mitsuba's Monte-Carlo noise per region is well under the 2 % tolerance (measured 0.1-0.3 %)
+    assert cc.standard_error.max() < 0.005, cc.table()
+    assert cc.pixels.min() >= 20
+    # mean radiance per region within 2 % (measured |dev| <= 0.6 %: D65's lines box-averaged per
+    # 20 nm band by Mitsuba's film vs sampled at the grid by nmmm give -0.4 %)
+    assert np.abs(cc.deviation).max() < 0.02, cc.table()
+    # (band by band the plate means differ by up to 5-7 % at 400 nm: Mitsuba's film averages D65 over
+    # the half band 400-410 nm where D65 rises by 10 %, nmmm samples it at 400 nm; not a test)
+    print("band deviation %", np.round(100 * cc.band_deviation, 1))
+    # the regions differ (gradient across the plate) and Mitsuba sees the same gradient
+    assert np.ptp(cc.mean_nmmm) > 0.05 * cc.mean_nmmm.mean()
+    assert np.corrcoef(cc.mean_mitsuba.ravel(), cc.mean_nmmm.ravel())[0, 1] > 0.99
+
+
+def test_regions_refuse_a_plate_smaller_than_the_grid():
+    from nmmm.appearance.render.mitsuba_crosscheck import plate_regions
+    from nmmm.errors import InvalidInputError
+
+    on = np.zeros((10, 10), bool)
+    on[4:7, 4:7] = True
+    with pytest.raises(InvalidInputError, match="fewer than"):
+        plate_regions(on, (3, 3))
+    regs = plate_regions(np.ones((12, 12), bool), (2, 2))
+    assert len(regs) == 4 and sum(int(m.sum()) for _, _, m in regs) == 100
