@@ -9,8 +9,10 @@ floor because only matching (and later calibration) consumes them.
 - :mod:`~nmmm.matching.metamerism` — the CIEDE2000 residual vector and the CIE special
   metamerism index for a change of illuminant.
 - :mod:`~nmmm.matching.recipe_match` — :func:`match_recipe` over a :class:`RecipeModel`.
-- :mod:`~nmmm.matching.calibration` — :func:`calibrate_colourant`: a compound's k scale
-  (Kramers–Kronig-consistent n) and size scale fitted on a measured ladder.
+- :mod:`~nmmm.matching.calibration` — :func:`calibrate_colourant`: a smooth correction of a compound's
+  k(λ) (Kramers–Kronig-consistent n, :mod:`~nmmm.matching.k_correction`) and its size fitted on a measured ladder.
+- :mod:`~nmmm.matching.empirical_km` — :func:`calibrate_empirical`: the industry's two-constant
+  Kubelka–Munk K, S per unit concentration (Duncan mixing, Saunderson) on the same ladder.
 - :mod:`~nmmm.matching.colourant_selection` — :func:`select_colourants`: the best subsets of at most
   N colourants of a palette (KM ranking of every subset, adding–doubling finish of the best).
 - :mod:`~nmmm.matching.batch_correction` — :func:`correct_batch`: additions that bring a made
@@ -20,6 +22,7 @@ floor because only matching (and later calibration) consumes them.
 
 from nmmm.matching.batch_correction import BatchCorrection, correct_batch
 from nmmm.matching.calibration import CalibrationResult, LadderSample, calibrate_colourant, write_calibrated_material
+from nmmm.matching.empirical_km import EmpiricalCalibration, calibrate_empirical
 from nmmm.matching.colourant_selection import SubsetMatch, select_colourants
 from nmmm.matching.measured_files import (
     MeasuredSpectra,
@@ -37,12 +40,14 @@ from nmmm.matching.recipe_match import MatchResult, RecipeModel, match_recipe, p
 __all__ = [
     "BatchCorrection",
     "CalibrationResult",
+    "EmpiricalCalibration",
     "LadderSample",
     "MatchResult",
     "MeasuredSpectra",
     "RecipeModel",
     "SubsetMatch",
     "calibrate_colourant",
+    "calibrate_empirical",
     "correct_batch",
     "cxf_geometries",
     "delta_e2000_residuals",
