@@ -9,6 +9,8 @@ keeps working).
 - :mod:`~nmmm.appearance.flakes` — flake tilt distributions, flake optics, discrete flake lists.
 - :mod:`~nmmm.appearance.multiangle` — CIELAB at the ASTM E2194 / E2539 geometries, flop index.
 - :mod:`~nmmm.appearance.sparkle` — sparkle and graininess of images (renders or photographs).
+- :mod:`~nmmm.appearance.effect_coat` — an effect coat from its composition (:class:`EffectCoat`:
+  flakes, pigments, binder, coat thicknesses -> derived flake layer -> BRDF and flake list).
 - :mod:`~nmmm.appearance.deposit` — effect paints from a simulated flake deposit
   (:func:`grey_metallic_from_deposit`: the same flakes as a list and as the statistical BRDF).
 - :mod:`~nmmm.appearance.render` — spectral plate renderer, stereo pairs, OpenEXR, Mitsuba.
@@ -39,7 +41,8 @@ _LAZY = {
     "multiangle_lab": "multiangle", "flop_index": "multiangle", "FLOP_INDEX_METHODS": "multiangle",
     "aspecular_directions": "multiangle", "plot_colour_travel": "multiangle",
     "ASTM_E2194_ASPECULAR_DEG": "multiangle", "ASTM_E2539_ASPECULAR_DEG": "multiangle",
-    "sparkle_graininess": "sparkle", "grey_metallic_from_deposit": "deposit",
+    "sparkle_graininess": "sparkle", "grey_metallic_from_deposit": "deposit", "grey_metallic_coat": "deposit",
+    "EffectCoat": "effect_coat", "FlakeSpec": "effect_coat",
 }
 
 

@@ -1,0 +1,504 @@
+"""An effect coat described by its composition: flakes and pigments in one basecoat.
+
+- :class:`FlakeSpec` — the flakes as made: material (a compound, or a layered flake given as
+  an :class:`nmmm.layers.Stack`, e.g. Fe2O3 or TiO2 on mica, alumina or silica), diameter
+  distribution, thickness, volume fraction in the basecoat, orientation (the tilt scale of
+  the deposit model, or a tabulated density of normals per steradian).
+- :class:`EffectCoat` — the coat: flakes, coloured/white pigments in the same binder
+  (:class:`nmmm.layers.pigment_mixture.Component`, the ``[[pigments]]`` of films), binder,
+  basecoat thickness, clear coat above, primer/substrate below.
+  :meth:`EffectCoat.derived` gives the layer parameters the BRDF needs — never typed by hand:
+  flake number density, optical depth τ (flake face area per unit area, and its projection
+  along the tilt distribution), tilt distribution and depth profile of the flakes;
+  :meth:`EffectCoat.brdf` returns ``(PaintBRDF, FlakeList)`` for the multi-angle colour, the
+  renderer and the sparkle images (the same flakes, averaged and discrete).
+- :meth:`EffectCoat.from_sem` — the flake statistics measured on SEM cross-sections
+  (:func:`nmmm.microstructure.estimate_flakes`) as a :class:`FlakeSpec`.
+
+Derivation (``derive=``)
+------------------------
+``"deposit"`` (default): the flakes of a :func:`nmmm.microstructure.flake_deposit` in a
+``cell_nm`` × coat-thickness cell (Couka, Willot & Jeulin 2012): τ = Σ π D²/4 / cell area, the
+tilt distribution a kernel density estimate of the deposited normals (flakes resting on
+others tilt), the depth profile the band holding the central 98 % of the flake centres.
+``"volume"``: without a deposit — N_A = φ H / (π⟨D²⟩/4 · t) flakes per unit area, τ = φ H / t,
+tilts from the deposit model's law (half-normal in θ of scale ``tilt_std_deg``, azimuth
+uniform) and flakes uniform through the coat; the discrete list is drawn at random.
+
+Expert override: ``optical_depth`` and ``tilt_deg`` (a Gaussian per steradian of that σ, the
+law of :func:`nmmm.appearance.flakes.gaussian_tilt`) replace the derived values when given —
+the old ``[effect]`` keys of a recipe.
+
+Errors name the field (``flakes.fraction: ...``); the recipe prefixes them with ``effect.``.
+
+References
+----------
+- E. Couka, F. Willot, D. Jeulin, "A mixed Boolean and deposit model for the modeling of metal
+  pigments in paint layers", Image Anal. Stereol. 32(2) (2012).
+- S. Ershov, K. Kolchin, K. Myszkowski, "Rendering pearlescent appearance based on
+  paint-composition modelling", Computer Graphics Forum 20(3) (2001) 227.
+- F. J. Maile, G. Pfaff, P. Reynders, "Effect pigments — past, present and future",
+  Prog. Org. Coat. 54 (2005) 150 (metal-oxide-on-mica, alumina and silica pigments).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from nmmm.errors import InvalidInputError
+from nmmm.spectra import as_wavelength_nm
+
+__all__ = ["FlakeSpec", "EffectCoat", "DerivedFlakeLayer"]
+
+#: thinnest layer of a layered flake that is still a film (about one oxide unit cell)
+_MIN_LAYER_NM = 1.0
+
+
+def _num(v, key, lo=None, hi=None, lo_open=True, what="") -> float:
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{key}: must be a number{what}, got {v!r}") from None
+    if not math.isfinite(x):
+        raise InvalidInputError(f"{key}: must be finite{what}, got {v!r}")
+    if lo is not None and (x <= lo if lo_open else x < lo):
+        raise InvalidInputError(f"{key}: must be {'>' if lo_open else '>='} {lo:g}{what}, got {x:g}")
+    if hi is not None and x > hi:
+        raise InvalidInputError(f"{key}: must be <= {hi:g}{what}, got {x:g}")
+    return x
+
+
+@dataclass(frozen=True)
+class FlakeSpec:
+    """The flakes of an effect coat, as a formulator describes them.
+
+    material : str, Material, complex or nmmm.layers.Stack
+        ``"aluminium"`` (Rakić), ``"mica"`` (TiO2/mica/TiO2, :func:`mica_pigment` defaults), a
+        database key / :class:`~nmmm.materials.Material` (a metal: opaque flake; a dielectric:
+        a platelet of that thickness), or a layered flake (a :class:`nmmm.layers.Stack` whose
+        layers, top to bottom, make the platelet; its ambient/substrate are ignored — the
+        flake sits in the binder).
+    diameter_um, diameter_std_um : mean and standard deviation of the flake diameters
+        (log-normal), µm.
+    thickness_nm : flake thickness; for a layered flake None means the sum of its layers.
+    fraction : volume fraction of flakes in the basecoat, in [0, 1).
+    tilt_std_deg : orientation spread — the scale of the half-normal tilt law of the deposit
+        model (:func:`nmmm.microstructure.flake_deposit`), degrees.
+    tilt_density : optional ``(tilt_deg, density_per_sr)`` tabulated density of flake normals
+        (replaces ``tilt_std_deg``; needs ``derive="volume"``).
+    """
+
+    material: object = "aluminium"
+    diameter_um: float = 20.0
+    diameter_std_um: float = 6.0
+    thickness_nm: float | None = 300.0
+    fraction: float = 0.008
+    tilt_std_deg: float = 6.0
+    tilt_density: tuple | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        _num(self.diameter_um, "flakes.diameter_um", 0.0, what=" (flake diameter, µm)")
+        _num(self.diameter_std_um, "flakes.diameter_std_um", 0.0, lo_open=False)
+        if self.thickness_nm is not None:
+            _num(self.thickness_nm, "flakes.thickness_nm", 0.0, what=" (flake thickness, nm)")
+        f = _num(self.fraction, "flakes.fraction", 0.0, 1.0, lo_open=False, what=" (a volume fraction: 1 % is 0.01)")
+        if f >= 1.0:
+            raise InvalidInputError(f"flakes.fraction: must be < 1 (a volume fraction of the coat), got {f:g}")
+        _num(self.tilt_std_deg, "flakes.tilt_std_deg", 0.0, 90.0, lo_open=False, what=" (degrees)")
+        if self.tilt_density is not None:
+            self.tilt_distribution()  # refuses a table that is not a density, naming the key
+        if self.layered:
+            self._check_layers()
+            total = sum(float(la.thickness_nm) for la in self.material.layers)
+            if self.thickness_nm is None:
+                object.__setattr__(self, "thickness_nm", total)
+            elif not math.isclose(float(self.thickness_nm), total, rel_tol=1e-6):
+                raise InvalidInputError(
+                    f"flakes.thickness_nm: {float(self.thickness_nm):g} nm, but the layers of the flake add up to "
+                    f"{total:g} nm; leave thickness_nm out for a layered flake (it is their sum)")
+        elif self.thickness_nm is None:
+            raise InvalidInputError("flakes.thickness_nm: required for a flake that is not layered (nm)")
+
+    @property
+    def layered(self) -> bool:
+        from nmmm.layers import Stack
+
+        return isinstance(self.material, Stack)
+
+    def _check_layers(self, wavelength_nm=None):
+        w = np.arange(380.0, 781.0, 20.0) if wavelength_nm is None else as_wavelength_nm(wavelength_nm)
+        layers = self.material.layers
+        if not layers:
+            raise InvalidInputError("flakes.layers: a layered flake needs at least one layer")
+        for i, la in enumerate(layers):
+            d = np.asarray(la.thickness_nm, float)
+            if d.ndim or not (np.isfinite(d) and d >= _MIN_LAYER_NM):
+                raise InvalidInputError(
+                    f"flakes.layers[{i}].thickness_nm: {d.tolist()!r} nm is not a physical film; a layer of a flake is one "
+                    f"thickness >= {_MIN_LAYER_NM:g} nm (about one oxide unit cell)")
+            try:
+                nk = np.broadcast_to(np.asarray(_nk(la.material, w), complex), w.shape)
+            except InvalidInputError as exc:
+                raise InvalidInputError(f"flakes.layers[{i}].material: {exc}") from None
+            if np.any(~np.isfinite(nk)) or np.any(nk.imag < 0) or np.any(nk.real <= 0):
+                bad = nk[~np.isfinite(nk) | (nk.imag < 0) | (nk.real <= 0)][0]
+                raise InvalidInputError(
+                    f"flakes.layers[{i}].material: n + ik = {bad:.4g} is not a passive medium (needs n > 0 and "
+                    "k >= 0 over the grid)")
+
+    def tilt_distribution(self):
+        """The analytic tilt distribution of the flakes (before any deposit): the tabulated
+        density if given, else the deposit model's half-normal law p(θ) ∝ exp(−θ²/2s²) per
+        unit θ, i.e. exp(−θ²/2s²) / (2π sin θ) per steradian."""
+        from nmmm.appearance.flakes import TiltDistribution
+
+        if self.tilt_density is not None:
+            try:
+                t, d = self.tilt_density
+                return TiltDistribution.tabulated(t, d, name="tabulated")
+            except InvalidInputError as exc:
+                raise InvalidInputError(f"flakes.tilt_density: {exc}") from None
+            except (TypeError, ValueError):
+                raise InvalidInputError("flakes.tilt_density: give (tilt_deg, density_per_sr), two lists of equal "
+                                        "length") from None
+        s = float(self.tilt_std_deg)
+        if s <= 0:
+            raise InvalidInputError("flakes.tilt_std_deg: 0 is a Dirac (perfectly flat flakes), not a density; "
+                                    "give a spread > 0 degrees")
+        t = np.linspace(0.0, 90.0, 8193)
+        sin = np.sin(np.radians(np.maximum(t, t[1])))
+        dens = np.exp(-0.5 * (t / s) ** 2) / sin * (t <= 80.0)  # the deposit model truncates at 80°
+        return TiltDistribution(t, dens, name=f"half-normal tilt s={s:g} deg (deposit law)")
+
+    def optics(self):
+        """Flake optics: :class:`MetalFlakeOptics` or :class:`ThinFilmFlakeOptics`."""
+        from nmmm.appearance.flakes import MetalFlakeOptics, ThinFilmFlakeOptics, aluminium_flakes, mica_pigment
+
+        m = self.material
+        if self.layered:
+            layers = tuple((la.material, float(la.thickness_nm), bool(la.coherent)) for la in m.layers)
+            return ThinFilmFlakeOptics(layers, name=self.name or "layered flake")
+        if isinstance(m, str) and m.lower() in ("aluminium", "aluminum", "al"):
+            return aluminium_flakes()
+        if isinstance(m, str) and m.lower() == "mica":
+            return mica_pigment()
+        nk = np.asarray(_nk(m, np.array([550.0])), complex)
+        if nk.imag.max() > 1.0:  # a metal: opaque at these thicknesses
+            return MetalFlakeOptics(_material(m), name=self.name or f"metal flake ({m})")
+        coherent = float(self.thickness_nm) < 1000.0
+        return ThinFilmFlakeOptics(((_material(m), float(self.thickness_nm), coherent),),
+                                   name=self.name or f"platelet ({m})")
+
+    def diameter_distribution(self):
+        mean, std = float(self.diameter_um) * 1e3, float(self.diameter_std_um) * 1e3
+        return ("lognormal", mean, std) if std > 0 else mean
+
+    def mean_square_diameter_nm2(self) -> float:
+        mean, std = float(self.diameter_um) * 1e3, float(self.diameter_std_um) * 1e3
+        return mean * mean + std * std
+
+
+def _material(m):
+    from nmmm.materials import as_material, get
+
+    if isinstance(m, str):
+        try:
+            return get(m)
+        except Exception as exc:  # unknown key: say which
+            raise InvalidInputError(f"flakes.material: {m!r} is not a known compound key ({exc})") from None
+    return as_material(m)
+
+
+def _nk(m, w):
+    if isinstance(m, (int, float, complex)):
+        return np.full(np.shape(w), complex(m))
+    if hasattr(m, "nk"):
+        return m.nk(w)
+    return _material(m).nk(w)
+
+
+@dataclass(frozen=True)
+class DerivedFlakeLayer:
+    """Flake-layer parameters derived from the composition (the numbers the BRDF uses)."""
+
+    number_density_per_mm2: float
+    optical_depth: float  # flake face area per unit area of paint
+    projected_optical_depth: float  # τ·⟨cos θ⟩: the area the flakes cover seen along the normal
+    tilt: object  # TiltDistribution
+    mean_tilt_deg: float
+    depth_range: tuple  # (top, bottom) of the flake band, fractions of the basecoat thickness
+    volume_fraction: float
+    n_flakes_in_cell: int
+    source: str
+    overridden: tuple = ()
+
+    def table(self) -> list[dict]:
+        """Rows (quantity, value, unit) for reports."""
+        return [
+            dict(quantity="flakes per mm²", value=self.number_density_per_mm2, unit="1/mm²"),
+            dict(quantity="optical depth τ (face area / area)", value=self.optical_depth, unit="1"),
+            dict(quantity="projected optical depth τ⟨cos θ⟩", value=self.projected_optical_depth, unit="1"),
+            dict(quantity="mean tilt", value=self.mean_tilt_deg, unit="deg"),
+            dict(quantity="flake band top (fraction of coat)", value=self.depth_range[0], unit="1"),
+            dict(quantity="flake band bottom (fraction of coat)", value=self.depth_range[1], unit="1"),
+            dict(quantity="flake volume fraction", value=self.volume_fraction, unit="1"),
+        ]
+
+
+@dataclass(frozen=True, repr=False)
+class EffectCoat:
+    """A basecoat of flakes and pigments in a binder, under a clear coat, over a primer.
+
+    flakes : FlakeSpec
+    pigments : sequence of :class:`nmmm.layers.pigment_mixture.Component` (fractions of the
+        dry basecoat), coloured or white pigments between the flakes.
+    binder : index or Material of the binder (also the clear coat's).
+    coat_thickness_nm : basecoat thickness H (the flakes are inside it).
+    clear_coat_nm : clear coat thickness above the basecoat (shifts the flakes' depths).
+    roughness : GGX roughness of the clear coat's top surface.
+    substrate_reflectance : internal diffuse reflectance of the primer/substrate below (scalar,
+        or ``(wavelength_nm, values)``).
+    derive : "deposit" or "volume" (module docstring); cell_nm, seed: the deposit's cell and seed.
+    optical_depth, tilt_deg : expert override of the derived τ and tilt (Gaussian σ per sr).
+    """
+
+    flakes: FlakeSpec = field(default_factory=FlakeSpec)
+    pigments: tuple = ()
+    binder: object = 1.5
+    coat_thickness_nm: float = 20e3
+    clear_coat_nm: float = 30e3
+    roughness: float = 0.0
+    substrate_reflectance: object = 0.35
+    derive: str = "deposit"
+    cell_nm: tuple = (450e3, 450e3)
+    seed: int = 1
+    optical_depth: float | None = None
+    tilt_deg: float | None = None
+    name: str = "effect coat"
+    _memo: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self):
+        if not isinstance(self.flakes, FlakeSpec):
+            raise InvalidInputError("flakes: must be a FlakeSpec")
+        object.__setattr__(self, "pigments", tuple(self.pigments))
+        H = _num(self.coat_thickness_nm, "coat_thickness_nm", 0.0, what=" (basecoat thickness, nm)")
+        _num(self.clear_coat_nm, "clear_coat_nm", 0.0, lo_open=False)
+        if self.derive not in ("deposit", "volume"):
+            raise InvalidInputError(f"derive: must be 'deposit' or 'volume', got {self.derive!r}")
+        fl = self.flakes
+        t = float(fl.thickness_nm)
+        if t >= H:
+            raise InvalidInputError(
+                f"flakes.thickness_nm: flakes {t:g} nm thick do not fit in a basecoat {H:g} nm thick; thin the "
+                "flakes or thicken the coat (coat_thickness)")
+        if fl.tilt_density is not None and self.derive == "deposit":
+            raise InvalidInputError("flakes.tilt_density: a tabulated tilt density cannot drive the deposit model "
+                                    "(it draws half-normal tilts of scale tilt_std_deg); use derive = 'volume'")
+        self._check_packing()
+        if self.optical_depth is not None:
+            _num(self.optical_depth, "optical_depth", 0.0, lo_open=False)
+        if self.tilt_deg is not None:
+            _num(self.tilt_deg, "tilt_deg", 0.0, 90.0)
+        pvc = sum(float(c.fraction) for c in self.pigments) + float(fl.fraction)
+        if pvc >= 1.0:
+            raise InvalidInputError(f"pigments: pigments and flakes fill {pvc:g} of the coat (>= 1); the fractions "
+                                    "are of the dry basecoat")
+
+    def _check_packing(self):
+        """A layer of flakes tilted by θ stacks at least t cos θ + D sin θ high per flake
+        (a flake's vertical extent), so the densest fraction the coat can hold is
+        φ_max = t / ⟨t cos θ + D sin θ⟩ over the tilt law (and never above 1)."""
+        fl = self.flakes
+        tilt = fl.tilt_distribution()
+        th = np.radians(tilt.tilt_deg)
+        w = tilt.density * 2 * np.pi * np.sin(th)
+        w = w / np.trapezoid(w, th)
+        t, D = float(fl.thickness_nm), float(fl.diameter_um) * 1e3
+        mean_h = float(np.trapezoid(w * (t * np.cos(th) + D * np.sin(th)), th))
+        phi_max = min(1.0, t / mean_h)
+        if fl.fraction > phi_max:
+            raise InvalidInputError(
+                f"flakes.fraction: {fl.fraction:g} of {D / 1e3:g} µm × {t:g} nm flakes cannot fit the coat at a tilt "
+                f"spread of {fl.tilt_std_deg:g}° (mean vertical extent {mean_h:.4g} nm per flake): at most "
+                f"{phi_max:.3g}; lower the fraction or the tilt spread")
+
+    # -- derivation --------------------------------------------------------------------
+    def deposit(self):
+        """The flake deposit of the basecoat (:func:`nmmm.microstructure.flake_deposit`), cached."""
+        if "deposit" not in self._memo:
+            from nmmm.microstructure import flake_deposit
+
+            fl = self.flakes
+            box = (float(self.cell_nm[0]), float(self.cell_nm[1]), float(self.coat_thickness_nm))
+            try:
+                dep = flake_deposit(box_nm=box, diameter_nm=fl.diameter_distribution(), thickness_nm=float(fl.thickness_nm),
+                                    fraction=float(fl.fraction), tilt_std_deg=float(fl.tilt_std_deg), seed=self.seed)
+            except InvalidInputError as exc:
+                raise InvalidInputError(f"flakes.fraction: the deposit model cannot place these flakes in the coat: {exc}") from None
+            self._memo["deposit"] = dep
+        return self._memo["deposit"]
+
+    def flake_list(self):
+        """The discrete flakes (:class:`nmmm.appearance.flakes.FlakeList`) of one cell: the
+        deposit's, or drawn at random for ``derive="volume"``; depths from the coat's top."""
+        if "list" not in self._memo:
+            from nmmm.appearance.flakes import FlakeList
+
+            fl, n_b = self.flakes, self.n_binder()
+            if self.derive == "deposit":
+                lst = FlakeList.from_deposit(self.deposit(), fl.optics(), n_binder=n_b,
+                                             coat_thickness_nm=float(self.clear_coat_nm))
+            else:
+                d = self._volume_numbers()
+                area = float(self.cell_nm[0]) * float(self.cell_nm[1])
+                n = int(np.random.default_rng(self.seed).poisson(d[0] * area))
+                c0 = float(self.clear_coat_nm)
+                mean = float(fl.diameter_um) * 1e3
+                lst = FlakeList.random(fl.optics(), fl.tilt_distribution(), n, region_nm=tuple(self.cell_nm),
+                                       mean_diameter_nm=mean, diameter_cv=float(fl.diameter_std_um) * 1e3 / mean,
+                                       depth_range_nm=(c0, c0 + float(self.coat_thickness_nm)), n_binder=n_b,
+                                       rng=self.seed)
+            self._memo["list"] = lst
+        return self._memo["list"]
+
+    def _volume_numbers(self):
+        fl = self.flakes
+        H, t = float(self.coat_thickness_nm), float(fl.thickness_nm)
+        na = float(fl.fraction) * H / (math.pi / 4 * fl.mean_square_diameter_nm2() * t)  # per nm²
+        return na, float(fl.fraction) * H / t
+
+    def derived(self) -> DerivedFlakeLayer:
+        """Flake number density, τ, projected τ, tilt distribution and depth profile."""
+        if "derived" in self._memo:
+            return self._memo["derived"]
+        from nmmm.appearance.flakes import TiltDistribution, gaussian_tilt
+
+        fl, H = self.flakes, float(self.coat_thickness_nm)
+        if self.derive == "deposit":
+            dep = self.deposit()
+            lst = self.flake_list()
+            tau = lst.optical_depth
+            na = dep.number_density_per_nm2
+            tilt = TiltDistribution.from_normals(dep.normals, name="deposit normals") if len(dep) >= 2 \
+                else fl.tilt_distribution()
+            if len(dep):
+                depth = dep.depth_nm
+                lo, hi = np.quantile(depth, [0.01, 0.99])
+                top = max(0.0, float(lo - np.median(dep.half_height_nm))) / H
+                bot = min(H, float(hi + np.median(dep.half_height_nm))) / H
+            else:
+                top, bot = 0.0, 1.0
+            vf, n_cell = dep.volume_fraction(), len(dep)
+        else:
+            na, tau = self._volume_numbers()
+            tilt, top, bot = fl.tilt_distribution(), 0.0, 1.0
+            vf, n_cell = float(fl.fraction), int(round(na * self.cell_nm[0] * self.cell_nm[1]))
+        over = []
+        if self.optical_depth is not None:
+            tau = float(self.optical_depth)
+            over.append("optical_depth")
+        if self.tilt_deg is not None:
+            tilt = gaussian_tilt(float(self.tilt_deg))
+            over.append("tilt_deg")
+        proj = tau * float(tilt.projected_mean(1.0))
+        out = DerivedFlakeLayer(na * 1e12, float(tau), proj, tilt, tilt.mean_tilt_deg(), (top, max(bot, top + 1e-6)),
+                                float(vf), int(n_cell), self.derive, tuple(over))
+        self._memo["derived"] = out
+        return out
+
+    # -- optics ------------------------------------------------------------------------
+    def n_binder(self) -> float:
+        """Real index of the binder at 550 nm (the flakes' surrounding medium)."""
+        return float(np.real(np.asarray(_nk(self.binder, np.array([550.0])), complex)[0]))
+
+    def pigment_optics(self, wavelength_nm):
+        """μa, μs, g of the pigments in the binder between the flakes
+        (:func:`nmmm.layers.pigment_mixture.mixture_optics`), or None without pigments."""
+        if not self.pigments:
+            return None
+        from nmmm.layers.pigment_mixture import mixture_optics
+
+        return mixture_optics(self.pigments, self.binder, as_wavelength_nm(np.atleast_1d(wavelength_nm)))
+
+    def _body_without_medium(self, w, mix):
+        """Fallback when the BRDF has no pigmented-medium input: the pigments as a
+        Kubelka–Munk film of the coat's thickness over the substrate (a Lambertian base)."""
+        from nmmm.layers.kubelka_munk import km_coefficients, km_reflectance
+
+        sub = _on_grid(self.substrate_reflectance, w)
+        if mix is None:
+            return (w, sub)
+        K, S = km_coefficients(mix.mu_a_per_nm, mix.mu_s_per_nm, mix.g)
+        return (w, np.clip(np.asarray(km_reflectance(K, S, float(self.coat_thickness_nm), sub), float), 0, 1))
+
+    def brdf(self, wavelength_nm=None):
+        """``(PaintBRDF, FlakeList)``: the statistical BRDF (multi-angle colour, renderer) and
+        the discrete flakes of one cell (glints, sparkle), from the same derived layer.
+        ``wavelength_nm`` (default 380–780 nm by 10 nm) is the grid of the pigments' optics."""
+        from nmmm.appearance.brdf import ClearCoat, PaintBRDF
+        from nmmm.appearance.flakes import FlakeLayer
+
+        w = as_wavelength_nm(np.arange(380.0, 781.0, 10.0) if wavelength_nm is None else np.atleast_1d(wavelength_nm))
+        d = self.derived()
+        optics = self.flakes.optics()
+        kw = {}
+        if "depth_range" in inspect.signature(FlakeLayer).parameters:
+            kw["depth_range"] = d.depth_range
+        layer = FlakeLayer(optics, d.tilt, d.optical_depth, **kw)
+        mix = self.pigment_optics(w)
+        coat = ClearCoat(self.binder, self.roughness)
+        medium = _coat_medium(mix, float(self.coat_thickness_nm)) if mix is not None else None
+        if medium is not None:
+            paint = PaintBRDF(coat, _on_grid_pair(self.substrate_reflectance, w), layer, medium=medium, name=self.name)
+        else:
+            paint = PaintBRDF(coat, self._body_without_medium(w, mix), layer, name=self.name)
+        return paint, self.flake_list()
+
+    @classmethod
+    def from_sem(cls, stats: dict, coat_thickness_nm: float, material="aluminium", **kw) -> "EffectCoat":
+        """An effect coat whose flakes are the statistics measured on SEM cross-sections
+        (the dict of :func:`nmmm.microstructure.estimate_flakes`): mean/std diameter,
+        thickness, rms tilt (the half-normal scale s has E[θ²] = s²) and flakes per mm²
+        (→ volume fraction φ = N_A π⟨D²⟩/4 · t / H)."""
+        try:
+            md, sd = float(stats["mean_diameter_nm"]), float(stats["std_diameter_nm"])
+            t, rms = float(stats["thickness_nm"]), float(stats["tilt_rms_deg"])
+            na = float(stats["number_density_per_mm2"]) * 1e-12
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InvalidInputError(f"SEM statistics need mean_diameter_nm, std_diameter_nm, thickness_nm, tilt_rms_deg "
+                                    f"and number_density_per_mm2 (estimate_flakes' keys); {exc}") from None
+        H = _num(coat_thickness_nm, "coat_thickness_nm", 0.0)
+        phi = na * math.pi / 4 * (md * md + sd * sd) * t / H
+        spec = FlakeSpec(material, md / 1e3, sd / 1e3, t, phi, rms, name=kw.pop("flake_name", ""))
+        return cls(spec, coat_thickness_nm=H, **kw)
+
+    def __repr__(self):
+        return (f"<EffectCoat '{self.name}': {self.flakes.fraction:g} flakes ({self.flakes.diameter_um:g} µm × "
+                f"{float(self.flakes.thickness_nm):g} nm), {len(self.pigments)} pigment(s), "
+                f"{self.coat_thickness_nm / 1e3:g} µm, derive={self.derive}>")
+
+
+def _on_grid(v, w):
+    if isinstance(v, tuple) and len(v) == 2:
+        return np.interp(w, np.asarray(v[0], float), np.asarray(v[1], float))
+    return np.broadcast_to(np.asarray(v, float), w.shape).astype(float)
+
+
+def _on_grid_pair(v, w):
+    return v if np.ndim(v) == 0 else (w, _on_grid(v, w))
+
+
+def _coat_medium(mix, thickness_nm):
+    """The BRDF's pigmented-coat input (helper H's ``CoatMedium``) when it exists."""
+    try:
+        from nmmm.appearance.brdf import CoatMedium, PaintBRDF
+    except ImportError:
+        return None
+    if "medium" not in inspect.signature(PaintBRDF).parameters:
+        return None
+    return CoatMedium(mix.wavelength_nm, mix.mu_a_per_nm, mix.mu_s_per_nm, mix.g, thickness_nm)
