@@ -147,42 +147,149 @@ def _ladder(path):
 @click.argument("ladder")
 @click.option("-o", "--output", default=None, help="Result folder (default calibrate-<ladder>).")
 @click.option("-i", "--illuminant", default="D65", show_default=True)
-def calibrate(ladder, output, illuminant):
-    """Fit a colourant's k scale and grain-size scale on a measured LADDER (TOML: compound, fit,
-    measured file, [[samples]] with recipe, set, left_out); writes the calibrated compound."""
-    import csv
-    import io
+@click.option("--mode", type=click.Choice(["physical", "empirical", "both"]), default="physical", show_default=True,
+              help="physical: the compound's k(λ) (KK-consistent n) and size through the full model; empirical: the "
+                   "industry's two-constant Kubelka-Munk K, S per unit concentration (Duncan, Saunderson); both: and a "
+                   "comparison table of their ΔE00 per sample.")
+@click.option("--fit", "fit_names", default=None, metavar="P1,P2,…",
+              help="Physical parameters to fit (default the ladder's 'fit', else k_scale,size_scale): k_scale, "
+                   "k_legendre_1..3 (tilt, bow, S-shape of ln k), size_scale.")
+def calibrate(ladder, output, illuminant, mode="physical", fit_names=None):
+    """Calibrate a colourant on a measured LADDER (TOML: compound, fit, measured file, [[samples]] with
+    recipe, set, left_out): the physical mode writes the calibrated compound and a recipe using it;
+    the empirical mode K and S per unit concentration; both compares them sample by sample."""
     import json
     from pathlib import Path
 
     from nmmm.atomic_io import atomic_output_dir
-    from nmmm.matching.calibration import CALIBRATION_PARAMETERS, calibrate_colourant, write_calibrated_material
+    from nmmm.matching.calibration import DEFAULT_CALIBRATION_FIT
 
     spec, samples, left = _ladder(ladder)
-    res = calibrate_colourant(samples, spec["compound"], fit=tuple(spec.get("fit", CALIBRATION_PARAMETERS)), left_out=left,
-                              illuminant=illuminant)
+    compound = spec["compound"]
+    fit = tuple(f.strip() for f in fit_names.split(",") if f.strip()) if fit_names else tuple(spec.get("fit", DEFAULT_CALIBRATION_FIT))
+    res = emp = None
+    if mode in ("physical", "both"):
+        from nmmm.matching.calibration import calibrate_colourant
+
+        res = calibrate_colourant(samples, compound, fit=fit, left_out=left, illuminant=illuminant)
+    if mode in ("empirical", "both"):
+        from nmmm.matching.empirical_km import calibrate_empirical
+
+        emp = calibrate_empirical(samples, left_out=left, illuminant=illuminant)
     out = Path(output) if output else Path(f"calibrate-{Path(ladder).stem}")
+    rows = _comparison_rows(samples, left, res, emp)
     with atomic_output_dir(out) as tmp:
-        buf = io.StringIO()
-        wr = csv.writer(buf)
-        wr.writerow(["sample", "role", f"dE00_before_{illuminant}", f"dE00_after_{illuminant}"])
-        for s in samples:
-            wr.writerow([s.name, "left out" if s.name in left else "fitted", f"{res.de00_before[s.name]:.4f}",
-                         f"{res.de00_after[s.name]:.4f}"])
-        (tmp / "calibration.csv").write_text(buf.getvalue(), encoding="utf-8")
-        write_calibrated_material(res, tmp / f"{spec['compound']}_calibrated.csv")
-        (tmp / "calibration.json").write_text(json.dumps(dict(compound=res.compound, values=res.values,
-                                                              standard_errors=res.standard_errors, de00_before=res.de00_before,
-                                                              de00_after=res.de00_after, left_out=list(left),
-                                                              model_evaluations=res.evaluations, time_s=res.time_s), indent=1),
-                                              encoding="utf-8")
-    click.echo("  ".join(f"{k} = {v:.4f} ± {res.standard_errors[k]:.4f}" for k, v in res.values.items()))
-    for s in samples:
-        click.echo(f"{s.name}{' (left out)' if s.name in left else ''}: dE00 {res.de00_before[s.name]:.2f} -> "
-                   f"{res.de00_after[s.name]:.2f}")
-    for line in _calibration_instructions(samples, spec["compound"], res.values):
-        click.echo(line)
+        _write_rows(tmp / "calibration.csv", rows)
+        info = dict(compound=compound, mode=mode, illuminant=illuminant, left_out=list(left), samples=rows)
+        if res is not None:
+            from nmmm.matching.calibration import write_calibrated_material
+
+            mat = f"{compound}_calibrated.csv"
+            write_calibrated_material(res, tmp / mat, step_nm=5.0, source=Path(ladder).name)
+            (tmp / "calibrated_recipe.toml").write_text(_calibrated_recipe(samples, compound, mat, res.values), encoding="utf-8")
+            info.update(values=res.values, standard_errors=res.standard_errors, fit=list(fit), material_file=mat,
+                        model_evaluations=res.evaluations, time_s_physical=res.time_s,
+                        correlation=_correlation(res.covariance).tolist())
+        if emp is not None:
+            _write_rows(tmp / "km_constants.csv", emp.table())
+            info.update(colourants=list(emp.colourants), saunderson="k1 Fresnel at normal incidence, k2 internal diffuse "
+                        "(Judd 1942), from the binder's index", k1_mean=float(emp.k1.mean()), k2_mean=float(emp.k2.mean()),
+                        specular=emp.specular, time_s_empirical=emp.time_s)
+        (tmp / "calibration.json").write_text(json.dumps(info, indent=1), encoding="utf-8")
+        (tmp / "report.md").write_text(_calibration_report(ladder, compound, rows, res, emp, fit, illuminant), encoding="utf-8")
+    if res is not None:
+        click.echo("  ".join(f"{k} = {v:.4f} ± {res.standard_errors[k]:.4f}" for k, v in res.values.items()))
+    for r in rows:
+        click.echo(f"{r['sample']}{' (left out)' if r['role'] == 'left out' else ''}: dE00 "
+                   + "; ".join(f"{k.split('_')[1]} {r[k]}" for k in r if k.startswith("dE00_")))
+    if res is not None:
+        for line in _calibration_instructions(samples, compound, res.values):
+            click.echo(line)
+        click.echo(f"calibrated compound: {(out / f'{compound}_calibrated.csv').resolve()} (used by calibrated_recipe.toml)")
     click.echo(f"results: {out.resolve()}")
+
+
+def _comparison_rows(samples, left, res, emp) -> list[dict]:
+    """One row per sample: its role and ΔE00 uncalibrated / physical / empirical (those computed)."""
+    rows = []
+    for s in samples:
+        r = {"sample": s.name, "role": "left out" if s.name in left else "fitted"}
+        if res is not None:
+            r["dE00_uncalibrated"] = f"{res.de00_before[s.name]:.3f}"
+            r["dE00_physical"] = f"{res.de00_after[s.name]:.3f}"
+        if emp is not None:
+            r["dE00_empirical"] = f"{emp.de00_after[s.name]:.3f}"
+        rows.append(r)
+    return rows
+
+
+def _write_rows(path, rows):
+    import csv
+
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        wr = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        wr.writeheader()
+        wr.writerows(rows)
+
+
+def _correlation(cov):
+    import numpy as np
+
+    d = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
+    return cov / np.outer(d, d)
+
+
+def _calibrated_recipe(samples, compound, material_file, values) -> str:
+    """The first sample's recipe with ``compound`` read from the calibrated file and its grains scaled."""
+    from pathlib import Path
+
+    from nmmm.recipes.run import _dump_toml
+    from nmmm.recipes.schema import read_toml
+
+    s = samples[0]
+    raw, _, base = read_toml(s.recipe)
+    base = base if base is not None else s.base_dir
+    raw = dict(raw)
+    comps = {k: dict(v) for k, v in (raw.get("compounds") or {}).items()}
+    for name, c in comps.items():  # other compounds' files stay where they were
+        if "file" in c and base is not None and not Path(c["file"]).is_absolute():
+            c["file"] = str((Path(base) / c["file"]).resolve())
+    comps[compound] = {"file": material_file}
+    raw["compounds"] = comps
+    sd = values.get("size_scale")
+    if sd is not None and raw.get("pigments"):
+        raw["pigments"] = [dict(p, diameter_nm=p["diameter_nm"] * sd) if p.get("compound") == compound and "diameter_nm" in p
+                           else p for p in raw["pigments"]]
+    raw["name"] = f"{raw.get('name', s.name)} — {compound} calibrated"
+    head = (f"# {s.name!r} of the ladder with {compound} calibrated by nmmm calibrate (physical mode): optical constants "
+            f"from {material_file}" + (f", diameters x {sd:.6g}" if sd is not None else "") + "\n")
+    return head + _dump_toml(raw)
+
+
+def _calibration_report(ladder, compound, rows, res, emp, fit, illuminant) -> str:
+    """report.md: what was fitted, the values with their uncertainties, the ΔE00 table."""
+    from pathlib import Path
+
+    lines = [f"# Calibration of {compound} on {Path(ladder).name}", ""]
+    if res is not None:
+        lines += ["## Physical mode", "",
+                  f"Fitted {', '.join(fit)} through the full model (Mie + adding-doubling of each recipe); k(λ) multiplied by "
+                  "s·exp(Σ c_j P_j(x)) over the calibration window, n changed by the Kramers-Kronig transform of the change "
+                  f"of k. {res.evaluations} model evaluations, {res.time_s:.1f} s.", "",
+                  "| parameter | value | standard error |", "|---|---|---|"]
+        lines += [f"| {k} | {v:.5g} | {res.standard_errors[k]:.2g} |" for k, v in res.values.items()]
+        lines.append("")
+    if emp is not None:
+        lines += ["## Empirical mode", "",
+                  f"Two-constant Kubelka-Munk K, S per unit volume fraction of {', '.join(emp.colourants)} (Duncan mixing), "
+                  f"Saunderson k1 {emp.k1.min():.3f}-{emp.k1.max():.3f} (Fresnel, binder index), k2 {emp.k2.min():.3f}-"
+                  f"{emp.k2.max():.3f} (internal diffuse, Judd 1942), specular {emp.specular}; constants in km_constants.csv.",
+                  ""]
+    keys = list(rows[0])
+    lines += [f"## ΔE00 per sample ({illuminant}; left-out samples are predictions)", "",
+              "| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+    lines += ["| " + " | ".join(str(r[k]) for k in keys) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
 
 
 def _calibration_instructions(samples, compound, values):
