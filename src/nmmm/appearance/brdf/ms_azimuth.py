@@ -87,7 +87,8 @@ def double(R, T, n_doublings):
 
 
 def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int = 16):
-    """c_m(θi, θo, λ) on the external albedo grid (2° steps): ``(n_modes, NA, NA, L)``."""
+    """c_m(θi, θo) on the external albedo grid (2° steps): ``(NA, NA, n_modes)``; one shape for
+    all wavelengths: Σ_λ M_m / Σ_λ M_0 (the flakes' spectral contrast hardly moves it)."""
     L, n = tab.L, tab.n
     th, mu, sn, dmu = gauss_nodes(n_mu)
     G = flake_kernels(tab, mu, sn, dmu, n_modes, lossless=False)[:, :, 0]  # (M+1, up/down, j, k, L)
@@ -124,9 +125,11 @@ def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int 
         if m == 0:
             Mm = Mm - with_coat(Tdir[:, :, None] * Rb * Tdir[:, None, :])
         ms.append(Mm)
-    M0 = ms[0]
-    ok = M0 > 1e-12 * np.max(np.abs(M0), axis=(1, 2), keepdims=True)
-    c = np.stack([np.where(ok, Mm / np.where(ok, M0, 1.0), 0.0) for Mm in ms[1:]])  # (M, L, j, k)
+    # one azimuthal shape for all wavelengths (the ratio of the wavelength sums): the modes then
+    # cost one multiply per pair and wavelength
+    M0 = ms[0].sum(axis=0)
+    ok = M0 > 1e-12 * np.max(np.abs(M0))
+    c = np.stack([np.where(ok, Mm.sum(axis=0) / np.where(ok, M0, 1.0), 0.0) for Mm in ms[1:]])  # (M, j, k)
     c = 0.5 * (c + np.swapaxes(c, -1, -2))  # reciprocity (f = P/(μ dω) is symmetric)
     # external incidence grid -> internal angle -> linear weights on the Gauss nodes
     tha = np.radians(np.linspace(0.0, 90.0, _NA))
@@ -137,15 +140,14 @@ def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int 
     f = x - i0
     W[np.arange(_NA), i0] = 1 - f
     W[np.arange(_NA), i0 + 1] += f
-    out = np.einsum("aj,mljk,bk->mabl", W, c, W)
-    return np.ascontiguousarray(out)
+    return np.ascontiguousarray(np.einsum("aj,mjk,bk->abm", W, c, W))
 
 
 def _add_modes_py(wi, wo, out, Dms, Kms, C, astep):
     P = wi.shape[0]
     L = out.shape[1]
     NA = Dms.shape[0]
-    M = C.shape[0]
+    M = C.shape[2]
     for p in _prange(P):
         ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
         ox, oy, oz = wo[p, 0], wo[p, 1], wo[p, 2]
@@ -167,22 +169,20 @@ def _add_modes_py(wi, wo, out, Dms, Kms, C, astep):
         w01 = (1.0 - fa) * fb
         w10 = fa * (1.0 - fb)
         w11 = fa * fb
-        cm = np.empty(M)
+        s = 0.0
         c_prev, c_cur = 1.0, cphi
         for m in range(M):  # cos(m φ) by the Chebyshev recursion
-            cm[m] = c_cur
+            s += c_cur * (C[a0, b0, m] * w00 + C[a0, b0 + 1, m] * w01 + C[a0 + 1, b0, m] * w10
+                          + C[a0 + 1, b0 + 1, m] * w11)
             c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
+        s *= 2.0
+        if s < -1.0:
+            s = -1.0
+        if s == 0.0:
+            continue
         for l in range(L):
-            s = 0.0
-            for m in range(M):
-                s += cm[m] * (C[m, a0, b0, l] * w00 + C[m, a0, b0 + 1, l] * w01
-                              + C[m, a0 + 1, b0, l] * w10 + C[m, a0 + 1, b0 + 1, l] * w11)
-            s *= 2.0
-            if s < -1.0:
-                s = -1.0
-            base = ((Dms[a0, l] * (1.0 - fa) + Dms[a0 + 1, l] * fa)
-                    * (Dms[b0, l] * (1.0 - fb) + Dms[b0 + 1, l] * fb) * Kms[l])
-            out[p, l] += base * s
+            out[p, l] += s * ((Dms[a0, l] * (1.0 - fa) + Dms[a0 + 1, l] * fa)
+                              * (Dms[b0, l] * (1.0 - fb) + Dms[b0 + 1, l] * fb) * Kms[l])
 
 
 if _nb is not None:
@@ -193,16 +193,43 @@ else:  # pragma: no cover
     _add_modes = _add_modes_py
 
 
-def add_azimuth_modes(tab, wi, wo, out):
-    """out (P, L) += the azimuthal modes of the multiple-scattering lobe for the pairs (P, 3)."""
+def mode_table(tab) -> np.ndarray:
+    """c_m(θi, θo) of a table set, computed once and cached on it: ``(NA, NA, M)`` (M = 0 when
+    the paint has no flakes or no multiple-scattering lobe)."""
     C = getattr(tab, "_ms_modes", None)
     if C is None:
-        C = azimuth_modes(tab) if tab.has_flakes and np.any(tab.Kms > 0) else np.zeros((0, 1, 1, 1))
+        C = azimuth_modes(tab) if tab.has_flakes and np.any(tab.Kms > 0) else np.zeros((1, 1, 0))
         tab._ms_modes = C
-    if C.shape[0] == 0:
+    return C
+
+
+def azimuth_factor(tab, wi, wo) -> np.ndarray:
+    """s = 2 Σ_m c_m cos(m φ) (clipped at −1) for the pairs (P, 3): the lobe is f_ms⁰ (1 + s)."""
+    C = mode_table(tab)
+    wi = np.asarray(wi, float).reshape(-1, 3)
+    wo = np.asarray(wo, float).reshape(-1, 3)
+    if C.shape[2] == 0:
+        return np.zeros(wi.shape[0])
+    ri = np.hypot(wi[:, 0], wi[:, 1])
+    ro = np.hypot(wo[:, 0], wo[:, 1])
+    ok = (ri > 1e-9) & (ro > 1e-9) & (wi[:, 2] > 0) & (wo[:, 2] > 0)
+    cphi = np.clip(-(wi[:, 0] * wo[:, 0] + wi[:, 1] * wo[:, 1]) / np.where(ok, ri * ro, 1.0), -1.0, 1.0)
+    NA = C.shape[0]
+    xi = np.clip(_deg(wi[:, 2]) / tab.astep, 0, NA - 1.000001)
+    xo = np.clip(_deg(wo[:, 2]) / tab.astep, 0, NA - 1.000001)
+    a0, b0 = xi.astype(int), xo.astype(int)
+    fa, fb = (xi - a0)[:, None], (xo - b0)[:, None]
+    c = (C[a0, b0] * (1 - fa) * (1 - fb) + C[a0, b0 + 1] * (1 - fa) * fb + C[a0 + 1, b0] * fa * (1 - fb)
+         + C[a0 + 1, b0 + 1] * fa * fb)  # (P, M)
+    phi = np.arccos(cphi)
+    s = 2 * np.sum(c * np.cos(np.outer(phi, np.arange(1, C.shape[2] + 1))), axis=1)
+    return np.where(ok, np.maximum(s, -1.0), 0.0)
+
+
+def add_azimuth_modes(tab, wi, wo, out):
+    """out (P, L) += the azimuthal modes of the multiple-scattering lobe for the pairs (P, 3)."""
+    C = mode_table(tab)
+    if C.shape[2] == 0:
         return
-    tmp = np.zeros(out.shape, float) if out.dtype != np.float64 else out
-    _add_modes(np.ascontiguousarray(wi, float), np.ascontiguousarray(wo, float), tmp, tab.Dms,
+    _add_modes(np.ascontiguousarray(wi, float), np.ascontiguousarray(wo, float), out, tab.Dms,
                np.asarray(tab.Kms, float), C, float(tab.astep))
-    if tmp is not out:
-        out += tmp.astype(out.dtype)

@@ -113,8 +113,8 @@ class PaintBRDF:
         else:
             for s in range(0, wi.shape[0], _CHUNK):
                 out[s:s + _CHUNK] = tab.evaluate(wi[s:s + _CHUNK], wo[s:s + _CHUNK], comps)
-        if "multiple" in comps:
-            add_azimuth_modes(tab, wi, wo, out)
+        if "multiple" in comps and not getattr(tab, "fuses_ms_azimuth", False):
+            add_azimuth_modes(tab, wi, wo, out)  # a separate pass unless the tables' kernels include it
         if below is not None and below.any():
             out[below] = 0.0
         return out.reshape(shape + (tab.L,))
