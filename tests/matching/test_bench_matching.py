@@ -19,12 +19,12 @@ def bench():
 @pytest.mark.parametrize("mode", ["colorimetric", "spectral"])
 def test_both_fits_reach_the_target_and_counts_are_reported(bench, mode):
     out = bench.benchmark(repeat=1, step_nm=20.0, mode=mode)
-    for who in ("nmmm", "plain"):
+    for who in ("nmmm", "plain", "plain-stopped"):
         med = out["median"][who]
         assert med["de00"] < 0.3 and med["evaluations"] > 0 and med["wall_s"] > 0, (who, med)
         assert "ad" in out["last"][who]["by_solver"]
     assert "km" not in out["last"]["plain"]["by_solver"]  # the plain fit calls the adding-doubling model only
-    assert set(out["ratio"]) == {"wall_s", "evaluations", "de00"}
+    assert set(out["ratio"]) == set(out["ratio_stopped"]) == {"wall_s", "evaluations", "ad_evaluations", "de00"}
     assert out["last"]["plain"]["values"] == pytest.approx(list(bench.TRUE), rel=0.05)  # same target, same bounds
 
 
@@ -32,3 +32,4 @@ def test_command_line_prints_the_table(bench, capsys):
     bench.main(["--repeat", "1", "--mode", "spectral"])
     said = capsys.readouterr().out
     assert "nmmm match_recipe" in said and "plain least_squares" in said and "ratio plain / nmmm" in said
+    assert "ratio stopped / nmmm" in said and "AD evals" in said
