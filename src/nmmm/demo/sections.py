@@ -28,6 +28,8 @@ HOOKS = (
     ("Interference pigments in depth (nmmm.layers)", "nmmm.demo.interference:demo"),
     ("Real paint systems: tints, whites, coats (nmmm.layers)", "nmmm.demo.paint_systems:demo"),
     ("Colour matching: a hidden mixture matched back to a recipe (nmmm.matching)", "nmmm.demo.matching:demo"),
+    ("Calibration: a colourant calibrated from a measured ladder, physical and empirical (nmmm.matching)",
+     "nmmm.demo.matching:calibration_demo"),
     ("Physical fidelity: hematite colour sensitivity, gold size series", "nmmm.demo.sensitivity:demo"),
     ("Microstructures (nmmm.microstructure)", "nmmm.demo.microstructure:demo"),
     ("FFT homogenization (nmmm.homogenize)", "nmmm.demo.homogenization:demo"),

@@ -77,6 +77,7 @@ class CalibrationResult:
     base_material: object = None  # the uncorrected compound (a Material)
     covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of the fitted values, in fit order
     illuminant: str = "D65"
+    uncalibrated: dict = field(default_factory=dict)  # sample -> spectrum with the uncorrected compound
 
     @property
     def correction(self) -> tuple[float, tuple]:
@@ -99,9 +100,28 @@ def _k_params(values: dict) -> tuple[float, tuple]:
     return float(values.get("k_scale", 1.0)), tuple(coef)
 
 
+_MATERIALS: dict = {}
+
+
+def _materials(raw, rec, w, base):
+    """build_materials of a recipe, shared by ladder samples whose compounds (and levels) are the same:
+    a ladder varies fractions, not compounds, and building a database compound is the slow part."""
+    import json
+
+    from nmmm.recipes.run import build_materials
+
+    key = json.dumps([raw.get("compounds"), raw.get("levels"), str(base)], sort_keys=True, default=str) + w.tobytes().hex()
+    hit = _MATERIALS.get(key)
+    if hit is None:
+        if len(_MATERIALS) > 16:
+            _MATERIALS.clear()
+        hit = _MATERIALS[key] = build_materials(rec, w, progress=False)
+    return dict(hit)
+
+
 class _Sample:
     def __init__(self, s: LadderSample, compound: str):
-        from nmmm.recipes.run import _grid, build_materials
+        from nmmm.recipes.run import _grid
         from nmmm.recipes.schema import parse_recipe, read_toml
 
         raw, _, base = read_toml(s.recipe)
@@ -115,7 +135,7 @@ class _Sample:
         if R.shape != self.w.shape:
             raise InvalidInputError(f"sample {s.name!r}: {R.size} measured values, its recipe's grid has {self.w.size}")
         self.R = R
-        self.mats = build_materials(rec, self.w, progress=False)
+        self.mats = _materials(raw, rec, self.w, base)
         self.material = self.mats[compound]
         self.nk0 = np.asarray(self.material.nk(self.w))
         pigs = rec.pigments if rec.pigments is not None else ([rec.pigment] if rec.pigment is not None else [])
@@ -126,10 +146,18 @@ class _Sample:
                           if p.compound == compound and p.diameter_nm is not None and rec.coats is None]
         self.compound = compound
         self.window = (float(self.w[0]), float(self.w[-1]))
+        self.cache = {}
 
     def nk(self, s_k, coefficients=()):
-        """The corrected compound on the sample's grid (KK on a 5 nm grid of the base compound)."""
-        return corrected_material_nk(self.material, self.w, self.window, s_k, coefficients)
+        """The corrected compound on the sample's grid (KK on a 5 nm grid of the base compound);
+        samples sharing a grid share the result (``self.cache``, set by :func:`calibrate_colourant`)."""
+        key = (float(s_k), tuple(coefficients), self.window, self.w.tobytes())
+        hit = self.cache.get(key)
+        if hit is None:
+            if len(self.cache) > 64:
+                self.cache.clear()
+            hit = self.cache[key] = corrected_material_nk(self.material, self.w, self.window, s_k, coefficients)
+        return hit
 
     def reflectance(self, s_k, s_d, coefficients=()):
         from nmmm.layers.coat_stack import stack_reflectance
@@ -189,13 +217,14 @@ def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, lef
     if missing:
         raise InvalidInputError(f"left_out names {missing}, not among the samples {names}")
     used = [p for p in prepared if p.name not in left_out]
-    n_data = sum(p.w.size for p in used)
+    n_data = sum(p.w.size for p in used if p.amount > 0)
     if not used or n_data <= len(fit):
         raise InvalidInputError(f"{len(fit)} unknowns from {n_data} measured values in {len(used)} fitted sample(s): "
                                 "more unknowns than data — measure more samples or fit fewer parameters")
     window = _check_ladder(prepared, used, compound, fit)
+    shared = {}
     for p in prepared:
-        p.window = window
+        p.window, p.cache = window, shared
     bounds = bounds or {}
     lo = np.array([bounds.get(f, _BOUNDS[f])[0] for f in fit])
     hi = np.array([bounds.get(f, _BOUNDS[f])[1] for f in fit])
@@ -210,10 +239,11 @@ def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, lef
     def residuals(x):
         count[0] += 1
         sk, sd, coef = params(x)
-        return np.concatenate([(p.reflectance(sk, sd, coef) - p.R) * 100 for p in used])
+        return np.concatenate([(p.reflectance(sk, sd, coef) - p.R) * 100 for p in informative])
 
+    informative = [p for p in used if p.amount > 0]  # a sample without the compound does not depend on it
     x0 = np.clip([_START[f] for f in fit], lo, hi)
-    r = least_squares(residuals, x0, bounds=(lo, hi), method="trf", diff_step=1e-4, xtol=1e-8, ftol=1e-10)
+    r = least_squares(residuals, x0, bounds=(lo, hi), method="trf", diff_step=1e-4, xtol=1e-7, ftol=1e-7)
     col = np.linalg.norm(r.jac, axis=0)
     if np.any(col <= 1e-9 * max(col.max(), 1e-300)):
         dead = [f for f, c in zip(fit, col) if c <= 1e-9 * max(col.max(), 1e-300)]
@@ -228,15 +258,16 @@ def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, lef
         cov = np.full((len(fit), len(fit)), np.inf)
         se = {f: float("inf") for f in fit}
     sk, sd, coef = params(r.x)
-    before, after, pred = {}, {}, {}
+    before, after, pred, unc = {}, {}, {}, {}
     for p in prepared:
         lab_m = spectra_to_lab(p.w, np.clip(p.R, 0, None), illuminant)
-        before[p.name] = float(delta_e2000(lab_m, spectra_to_lab(p.w, p.reflectance(1.0, 1.0), illuminant)))
+        unc[p.name] = p.reflectance(1.0, 1.0)
+        before[p.name] = float(delta_e2000(lab_m, spectra_to_lab(p.w, unc[p.name], illuminant)))
         pred[p.name] = p.reflectance(sk, sd, coef)
         after[p.name] = float(delta_e2000(lab_m, spectra_to_lab(p.w, pred[p.name], illuminant)))
     return CalibrationResult(compound, dict(zip(fit, (float(v) for v in r.x))), se, before, after, tuple(left_out), count[0],
                              time.perf_counter() - t0, prepared[0].w, prepared[0].nk(sk, coef), pred, window,
-                             prepared[0].material, cov, illuminant)
+                             prepared[0].material, cov, illuminant, unc)
 
 
 def write_calibrated_material(result: CalibrationResult, path, step_nm: float | None = None, source: str = "") -> "Path":  # noqa: F821

@@ -96,7 +96,7 @@ def _start(c, q, X, Rg, R, k1, k2, specular):
     v = np.maximum(v, 1e-6 * max(v.max(), 1e-12))
     m = c.shape[1]
     best = None
-    for scale in np.geomspace(1e-3, 1e3, 25):
+    for scale in np.geomspace(1e-3, 1e3, 13):
         K, S = v[:m] * scale, v[m:] * scale
         r = empirical_reflectance(c @ K, c @ S, X, Rg, k1, k2, specular) - R
         e = float(r @ r)
@@ -155,7 +155,7 @@ def fit_km_constants(concentrations, thickness_um, substrate_reflectance, reflec
 
         best = None
         for z0 in [_start(c, q, X, Rg[:, j], R[:, j], k1[j], k2[j], specular)] + ([prev] if prev is not None else []):
-            r = least_squares(res, z0, bounds=_LN_BOUNDS, method="trf", xtol=1e-12, ftol=1e-14, gtol=1e-14)
+            r = least_squares(res, z0, bounds=_LN_BOUNDS, method="trf", xtol=1e-10, ftol=1e-12, gtol=1e-12)
             if best is None or r.cost < best.cost:
                 best = r
         prev = best.x
@@ -210,7 +210,8 @@ _VARIABLE = ("name", "description")  # keys of a ladder sample that the empirica
 def _film_of(sample):
     """(wavelength, concentrations {compound: fraction}, thickness µm, substrate R, n_binder, specular, signature)."""
     from nmmm.recipes.paint_stack import geometry_of
-    from nmmm.recipes.run import _grid, build_materials
+    from nmmm.matching.calibration import _materials
+    from nmmm.recipes.run import _grid
     from nmmm.recipes.schema import parse_recipe, read_toml
 
     raw, _, base = read_toml(sample.recipe)
@@ -223,7 +224,7 @@ def _film_of(sample):
     conc = {}
     for p in rec.pigments:
         conc[p.compound] = conc.get(p.compound, 0.0) + p.fraction
-    mats = build_materials(rec, w, progress=False)
+    mats = _materials(raw, rec, w, base)
     nb = np.asarray(mats[rec.binder.compound].nk(w)).real
     g = geometry_of(rec)
     specular = "included" if g.lower().startswith("di") else "excluded"
