@@ -177,10 +177,15 @@ def _common(f):
                    "clips; 'auto' is knee in a booth, none otherwise.")
 @click.option("--max-memory-gb", type=click.FloatRange(min=0, min_open=True), default=None,
               help="Memory limit of one render (default: half the physical memory); a larger render is refused.")
+@click.option("--stokes", is_flag=True, help="Polarized render: also write OUTPUT_stokes.exr (spectral S0..S3, "
+              "Stokes frame x = image right, y = image up; nmmm.appearance.render.plate.stokes).")
+@click.option("--polarizer", "polarizer_deg", type=float, default=None,
+              help="Polarized render seen through a linear polarizer whose axis is DEG from the image's right axis "
+                   "(counter-clockwise; 90 = vertical removes the coat's reflection near Brewster's angle).")
 def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_deg, light_azimuth_deg, irradiance,
               environment, env_radiance, width, height, exposure, colourspace, cells, camera_mm, look_at_mm, fov_deg, stereo,
               interocular_mm, glint_spread_deg, seed, booth, wall_reflectance, illuminance_lux, tone_map,
-              max_memory_gb):
+              max_memory_gb, stokes, polarizer_deg):
     """Render a painted plate to OUTPUT.exr and OUTPUT.png."""
     from nmmm.appearance.render.camera import PinholeCamera
     from nmmm.appearance.render.plate import render_plate, render_stereo_plate
@@ -205,7 +210,17 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
             lights, env = _lights(light, light_zenith_deg, light_azimuth_deg, irradiance, environment, env_radiance)
         kw = dict(lights=lights, environment=env, glint_spread_deg=glint_spread_deg, wavelength_nm=grid,
                   max_memory_gb=max_memory_gb)
-        if stereo:
+        polarized = {}
+        if stokes or polarizer_deg is not None:
+            from nmmm.appearance.render.camera import stereo_pair
+            from nmmm.appearance.render.plate.stokes import render_plate_stokes
+
+            cams = (dict(zip(("_left", "_right"), stereo_pair(camera_mm, look_at_mm, interocular_mm, (0.0, 1.0, 0.0),
+                                                              fov_deg, (width, height)))) if stereo else
+                    {"": PinholeCamera(camera_mm, look_at_mm, fov_deg=fov_deg, resolution=(width, height))})
+            polarized = {k: render_plate_stokes(plate, c, **kw) for k, c in cams.items()}
+            named = {k: v.s0 if polarizer_deg is None else v.through_polarizer(polarizer_deg) for k, v in polarized.items()}
+        elif stereo:
             imgs = render_stereo_plate(plate, camera_mm, look_at_mm, interocular_mm, fov_deg, (width, height), **kw)
             named = dict(zip(("_left", "_right"), imgs))
         else:
@@ -221,9 +236,15 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
         files.append(str(img.write_png(f"{output}{suffix}.png", exposure=exposure, colourspace=colourspace,
                                        tone_map=tm)))
         display[suffix.lstrip("_") or "mono"] = img.to_display(colourspace, exposure, tm or "none")[1]
+    pol = {}
+    for suffix, st in polarized.items():
+        if stokes:
+            files.append(str(st.write_exr(f"{output}{suffix}_stokes.exr")))
+        pol[suffix.lstrip("_") or "mono"] = {"polarizer_deg": polarizer_deg, "plate_mean_dolp": round(float(
+            st.degree_of_polarization()[st.on_plate].mean()), 5), "glints_polarized": False}
     click.echo(json.dumps({"plate": repr(plate), "files": files,
                            "glints": {k or "mono": v.metadata["n_glints"] for k, v in named.items()},
-                           "display": display}, indent=1))
+                           "display": display, **({"polarization": pol} if pol else {})}, indent=1))
 
 
 @render.command("object")
