@@ -279,7 +279,7 @@ class UniformEnvironment:
 class LatLongEnvironment:
     """A spectral environment map: radiance ``radiance`` (H, W, L) on ``wavelength_nm`` over
     a latitude–longitude grid (z up = the plate normal; row i at θ = (i + ½) π / H from the
-    zenith, column j at φ = (j + ½) 2π / W from +x towards +y). Nearest-texel lookup."""
+    zenith, column j at φ = (j + ½) 2π / W from +x towards +y). Bilinear lookup between texel centres."""
 
     wavelength_nm: np.ndarray
     radiance: np.ndarray
@@ -333,9 +333,11 @@ class LatLongEnvironment:
         return i * wd + j
 
     def lookup(self, wavelength_nm, directions) -> np.ndarray:
-        """Radiance (..., L) seen along ``directions`` (nearest texel)."""
-        r = self._on(wavelength_nm)
-        return r.reshape(-1, r.shape[2])[self.texel(directions)]
+        """Radiance (..., L) seen along ``directions``, bilinear between the four nearest texel
+        centres (φ periodic, θ clamped at the first/last row), as the plate renderer reads it."""
+        from nmmm.appearance.render.plate.environment import envmap_lookup_bilinear
+
+        return envmap_lookup_bilinear(self, wavelength_nm, directions)
 
     def upper_quadrature(self, wavelength_nm, n_theta: int = 8, n_phi: int = 16):
         """(directions (K, 3), solid angles (K,), radiance (K, L)) of the upper hemisphere,

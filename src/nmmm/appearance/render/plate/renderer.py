@@ -16,7 +16,7 @@ from nmmm.appearance.render.lights import (
     default_wavelengths,
 )
 from nmmm.appearance.render.plate.coarse_grid import _bilinear, accumulate_light, add_environment
-from nmmm.appearance.render.plate.environment import _envmap_smooth, _mirror_env
+from nmmm.appearance.render.plate.environment import _background, _envmap_smooth, _mirror_env
 from nmmm.appearance.render.plate.glints import _render_glints
 from nmmm.appearance.render.plate.scene import PaintedPlate
 from nmmm.appearance.render.plate.spectral_image import SpectralImage
@@ -55,6 +55,19 @@ def _light_at(lt, P):
     d[~ok] = (0.0, 0.0, 1.0)
     s = np.where(ok, s, 0.0)
     return d, s
+
+
+def _evaluate_f32(brdf, w, wi, wo, comps):
+    """The BRDF (N, L) as a writable float32 array (the paint kernels write float32 directly)."""
+    from nmmm.appearance.brdf import PaintBRDF
+    from nmmm.appearance.render.plate.scene import LambertianBRDF
+
+    if isinstance(brdf, (PaintBRDF, LambertianBRDF)):
+        f = brdf.evaluate(w, wi, wo, components=comps, dtype=np.float32)
+    else:  # a user's BRDF object: evaluate(wavelength_nm, wi, wo, components=...) only
+        f = brdf.evaluate(w, wi, wo, components=comps)
+    f = np.asarray(f, np.float32)
+    return f if f.flags.writeable and f.flags.c_contiguous else np.array(f, np.float32)
 
 
 def _plate_hits(camera: PinholeCamera, dirs):
@@ -213,15 +226,25 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     wo[~chit] = (0.0, 0.0, 1.0)
     wo[:, 2] = np.maximum(wo[:, 2], 0.0)
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
-    coarse = np.zeros((cd.shape[0], L), np.float32)
+    coarse = None
     comps = ("specular", "base", "multiple") if plate.flakes is not None else ("specular", "flakes", "base", "multiple")
-    first = True
     for lt, sp in zip(lights, spectra):
         wi, s = _light_at(lt, cP)
-        accumulate_light(coarse, brdf.evaluate(w, wi, wo, components=comps), s, sp, first)
-        first = False
+        f = _evaluate_f32(brdf, w, wi, wo, comps)
+        if coarse is None:  # the first light scales its BRDF values in place: no (pixels x L) copy
+            coarse = np.ascontiguousarray(f)
+            accumulate_light(coarse, coarse, s, sp, True)
+        else:
+            accumulate_light(coarse, f, s, sp, False)
+        del f
     if env is not None:
-        add_environment(coarse, brdf, w, wo, env, first)
+        if coarse is None:
+            coarse = np.empty((cd.shape[0], L), np.float32)
+            add_environment(coarse, brdf, w, wo, env, True)
+        else:
+            add_environment(coarse, brdf, w, wo, env, False)
+    if coarse is None:
+        coarse = np.zeros((cd.shape[0], L), np.float32)
     coarse[~chit] = 0.0
     coarse = coarse.reshape(rows.size, cols.size, L)
     if envmap is not None:
@@ -238,14 +261,20 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     ci = np.clip(np.searchsorted(cols, pc, side="right") - 1, 0, cols.size - 2)
     rf = ((pr - rows[ri]) / (rows[ri + 1] - rows[ri])).astype(np.float32)
     cf = ((pc - cols[ci]) / (cols[ci + 1] - cols[ci])).astype(np.float32)
-    img = np.empty((Hd, Wd, L), np.float32)
-    _bilinear(coarse, ri.astype(np.int64), rf, ci.astype(np.int64), cf, img)
+    if step == 1 and coarse.shape[:2] == (Hd, Wd) and coarse.dtype == np.float32:
+        img = coarse  # every pixel is a node: the coarse grid is the image (no interpolation copy)
+    else:
+        img = np.empty((Hd, Wd, L), np.float32)
+        _bilinear(coarse, ri.astype(np.int64), rf, ci.astype(np.int64), cf, img)
+    coarse_shape = (rows.size, cols.size, L)
 
     # --- off-plate pixels
     bg = background if background is not None else env
     off = ~on
-    if bg is None and envmap is not None:
-        img[off] = envmap.lookup(w, dirs[off]).astype(np.float32)
+    if bg is None and envmap is not None:  # the map seen past the plate, bilinear between texels
+        r = envmap._on(w)
+        _background(img, np.ascontiguousarray(dirs, float), off, r.shape[0], r.shape[1],
+                     np.ascontiguousarray(r.reshape(-1, L), np.float32))
     elif bg is None:
         img[off] = 0.0
     else:
@@ -253,12 +282,12 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
 
     # --- mirror reflection of an environment map in a smooth coat (the coat's Dirac)
     if envmap is not None and hasattr(brdf, "specular_reflectance"):
-        Fc = brdf.specular_reflectance(w, wo).reshape(coarse.shape)
-        if np.any(Fc > 0):
-            mirror = dirs * np.array([1.0, 1.0, -1.0])  # view ray mirrored at the plate
-            env_flat = envmap._on(w).reshape(-1, L)
+        Fc = brdf.specular_reflectance(w, wo).reshape(coarse_shape)
+        if np.any(Fc > 0):  # the view ray mirrored at the plate; the map bilinear between texels
+            r = envmap._on(w)
             _mirror_env(img, np.ascontiguousarray(Fc, np.float32), ri.astype(np.int64), rf, ci.astype(np.int64), cf,
-                        envmap.texel(mirror), on, np.ascontiguousarray(env_flat, np.float32))
+                        np.ascontiguousarray(dirs, float), on, r.shape[0], r.shape[1],
+                        np.ascontiguousarray(r.reshape(-1, L), np.float32))
 
     # --- mirror images of finite-size lights in a smooth clear coat (the coat's Dirac)
     if hasattr(plate.smooth_brdf, "specular_reflectance"):
