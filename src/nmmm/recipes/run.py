@@ -272,11 +272,21 @@ def _thin_film(recipe, mats, w, res):
                                   for l in tf.layers) + ".")
 
 
-def _effect_brdf(recipe):
+def _effect_coat(recipe, mats=None, w=None):
+    """The recipe's [effect] by its composition as an nmmm.appearance EffectCoat (issue 18)."""
+    from nmmm.recipes.effect_schema import build_effect_coat
+
+    return build_effect_coat(recipe.effect, build_materials(recipe, w) if mats is None else mats, name=recipe.name)
+
+
+def _effect_brdf(recipe, mats=None, w=None):
     from nmmm.appearance.brdf import ClearCoat, PaintBRDF
     from nmmm.appearance.flakes import FlakeLayer, aluminium_flakes, gaussian_tilt, mica_pigment
 
     e = recipe.effect
+    if e.by_composition:
+        w = _grid(recipe) if w is None else w
+        return _effect_coat(recipe, mats, w).brdf(w)[0]
     optics = aluminium_flakes(e.aluminium_key) if e.flakes == "aluminium" else mica_pigment(e.tio2_thickness_nm, e.mica_thickness_nm)
     return PaintBRDF(ClearCoat(e.coat_index, e.roughness), e.body_reflectance,
                      FlakeLayer(optics, gaussian_tilt(e.tilt_deg), e.optical_depth), name=recipe.name)
@@ -316,13 +326,24 @@ def _multiangle(recipe, brdf, w, res, add_spectra: bool):
 
 
 def _effect(recipe, mats, w, res):
-    brdf = _effect_brdf(recipe)
+    coat = _effect_coat(recipe, mats, w) if recipe.effect.by_composition else None
+    brdf = _effect_brdf(recipe) if coat is None else coat.brdf(w)[0]
     v = recipe.viewing
     g = _multiangle(recipe, brdf, w, res, add_spectra=True)
     res.primary = f"reflectance factor (aspecular {g[np.argmin(np.abs(g - 45))]:g}°)"
-    res.notes.append(f"Flake paint BRDF ({recipe.effect.flakes} flakes, optical depth {recipe.effect.optical_depth:g}, "
-                     f"Gaussian tilt σ = {recipe.effect.tilt_deg:g}°, base reflectance {recipe.effect.body_reflectance:g}); "
-                     f"reflectance factors π f at {v.illumination_deg:g}° illumination, in the plane of incidence.")
+    if coat is not None:
+        d = coat.derived()
+        res.scalars.update(flake_optical_depth=d.optical_depth, flakes_per_mm2=d.number_density_per_mm2,
+                           flake_mean_tilt_deg=d.mean_tilt_deg)
+        res.notes.append(f"Effect coat by its composition (nmmm.appearance.effect_coat, derive = {d.source}): "
+                         f"{d.number_density_per_mm2:.4g} flakes/mm², optical depth τ = {d.optical_depth:.3g} "
+                         f"(projected {d.projected_optical_depth:.3g}), mean tilt {d.mean_tilt_deg:.2f}°, flakes in "
+                         f"{d.depth_range[0]:.2f}–{d.depth_range[1]:.2f} of the basecoat"
+                         + (f"; expert override: {', '.join(d.overridden)}" if d.overridden else "") + ".")
+    else:
+        res.notes.append(f"Flake paint BRDF ({recipe.effect.flakes} flakes, optical depth {recipe.effect.optical_depth:g}, "
+                         f"Gaussian tilt σ = {recipe.effect.tilt_deg:g}°, base reflectance {recipe.effect.body_reflectance:g}); "
+                         f"reflectance factors π f at {v.illumination_deg:g}° illumination, in the plane of incidence.")
     if recipe.image is not None and recipe.outputs.images:
         images = None
         if recipe.image.scene.startswith("booth"):  # the viewing booth (issue 19): nmmm.recipes.plate_image

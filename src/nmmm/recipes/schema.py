@@ -32,8 +32,10 @@ A recipe has these tables (units in the key names; lengths nm, angles degrees, f
     ``equivalent_sphere`` (:func:`nmmm.layers.distributions.equivalent_sphere_diameter`).
 ``[plate]``      a plate of one compound seen in transmission (gold-ruby glass).
 ``[thin_film]``  a coherent/incoherent layer stack (interference pigments).
-``[effect]``     a flake (metallic / interference) paint BRDF (:mod:`nmmm.appearance.brdf`):
-    multi-angle colour and, with ``[image]``, a stereo pair of a plate.
+``[effect]``     a flake (metallic / interference) paint by its composition — ``[effect.flakes]``,
+    ``[[effect.pigments]]``, binder, coat thicknesses (:mod:`nmmm.recipes.effect_schema`,
+    :class:`nmmm.appearance.effect_coat.EffectCoat`): multi-angle colour and, with ``[image]``, a
+    stereo pair of a plate.
 ``[lighting]``   ``illuminants``, ``observer``; ``[viewing]`` ``illumination_deg``,
     ``aspecular_deg``; ``[outputs]`` what to write.
 
@@ -55,7 +57,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
 
 from nmmm.errors import RecipeError
-from nmmm.recipes.effect_schema import Effect
+from nmmm.recipes.effect_schema import Effect, check_effect_references
 from nmmm.recipes.schema_fields import (PIGMENT_SIZE_KEYS, AngleDeg, AspecularDeg, Fraction, NonNegative, Pigment,  # noqa: F401
                                        Positive, _Strict)
 
@@ -506,6 +508,8 @@ def _check_references(r: Recipe) -> None:
         need("thin_film.substrate", r.thin_film.substrate)
         for j, lay in enumerate(r.thin_film.layers):
             need(f"thin_film.layers[{j}].compound", lay.compound)
+    if r.effect is not None:
+        check_effect_references(r.effect, need)
     if r.image is not None and r.effect is None and r.film is None and r.coats is None:
         raise RecipeError(f"image: a plate image needs a paint ([film], [[coats]] or [effect]); a [{r.macro}] recipe "
                           "has no painted surface to render — remove [image]")
