@@ -15,6 +15,11 @@ specular side (γ = 45°: along the normal; γ = 110°: 65° on the illuminator'
   only the 45° set is tabulated here. Geometries at another illumination angle (e.g. the
   15° ones of multi-angle instruments, written 15as−45 … 15as80) are evaluated with
   ``illumination_deg=15``; that list was not checked against the standard's text.
+- :data:`GEOMETRY_SETS` — named geometry sets ``{illumination_deg: aspecular angles}`` of the
+  standards and of commercial instruments, each with its source in :data:`GEOMETRY_SOURCES`;
+  :func:`multiangle_lab_set` evaluates one set (one :class:`MultiAngleColour` per illumination).
+  Only sets whose angles were found in a source are listed (the X-Rite MA98 / MA-T12 sets with
+  15° illumination are not, for want of a source read here).
 - :func:`aspecular_directions` — (ωi, ωo) unit vectors for given aspecular angles.
 - :func:`multiangle_reflectance` — reflectance factors R = π f at those geometries.
 - :func:`multiangle_lab` -> :class:`MultiAngleColour` (L*, a*, b*, C*, h per angle).
@@ -50,6 +55,9 @@ __all__ = [
     "ASTM_E2194_ASPECULAR_DEG",
     "ASTM_E2194_ALL_ASPECULAR_DEG",
     "ASTM_E2539_ASPECULAR_DEG",
+    "GEOMETRY_SETS",
+    "GEOMETRY_SOURCES",
+    "multiangle_lab_set",
     "aspecular_directions",
     "multiangle_reflectance",
     "multiangle_lab",
@@ -66,6 +74,24 @@ ASTM_E2194_ASPECULAR_DEG = (15.0, 45.0, 110.0)
 ASTM_E2194_ALL_ASPECULAR_DEG = (15.0, 25.0, 45.0, 75.0, 110.0)
 #: ASTM E2539: aspecular angles at 45° illumination for interference pigments (deg)
 ASTM_E2539_ASPECULAR_DEG = (-15.0, 15.0, 25.0, 45.0, 75.0, 110.0)
+
+#: named multi-angle geometry sets: name -> {illumination angle (deg): aspecular angles (deg)}
+GEOMETRY_SETS = {
+    "ASTM E2194": {45.0: ASTM_E2194_ASPECULAR_DEG},
+    "ASTM E2194 (5 angles)": {45.0: ASTM_E2194_ALL_ASPECULAR_DEG},
+    "ASTM E2539 (45° illumination)": {45.0: ASTM_E2539_ASPECULAR_DEG},
+    "BYK-mac i": {45.0: (-15.0, 15.0, 25.0, 45.0, 75.0, 110.0)},
+}
+#: where each set of :data:`GEOMETRY_SETS` comes from
+GEOMETRY_SOURCES = {
+    "ASTM E2194": "ASTM E2194-14 (2017), the three aspecular angles required for metal flake pigmented materials",
+    "ASTM E2194 (5 angles)": "ASTM E2194-14 (2017), with the optional 25° and 75° geometries",
+    "ASTM E2539 (45° illumination)": "ASTM E2539-14 (2017), the 45° illumination set for interference pigments "
+                                     "(§1.2 also asks for more than one illumination angle)",
+    "BYK-mac i": "BYK-Gardner's BYK-mac i description (https://www.byk-instruments.com/en-US/color/byk-mac-i): colour "
+                 "at 15°, 25°, 45°, 75° and 110° aspecular plus a behind-gloss angle (−15°) for interference pigments, "
+                 "45° illumination — as summarised in a third-party note; the vendor page itself was not read here",
+}
 
 
 def aspecular_directions(aspecular_deg, illumination_deg: float = 45.0):
@@ -167,6 +193,15 @@ def multiangle_lab(brdf, wavelength_nm, aspecular_deg=ASTM_E2539_ASPECULAR_DEG, 
     xyz, lab = _spectra_to_lab(w, R, illuminant, observer)
     return MultiAngleColour(g, float(illumination_deg), w, R, np.asarray(xyz), np.asarray(lab), illuminant,
                             str(observer), getattr(brdf, "name", ""))
+
+
+def multiangle_lab_set(brdf, wavelength_nm, geometry: str = "ASTM E2539 (45° illumination)", illuminant: str = "D65",
+                       observer: str = "10") -> dict:
+    """CIELAB at every geometry of a named set of :data:`GEOMETRY_SETS` ->
+    ``{illumination_deg: MultiAngleColour}``."""
+    if geometry not in GEOMETRY_SETS:
+        raise InvalidInputError(f"unknown geometry set {geometry!r}; choose among {list(GEOMETRY_SETS)}")
+    return {ti: multiangle_lab(brdf, wavelength_nm, g, ti, illuminant, observer) for ti, g in GEOMETRY_SETS[geometry].items()}
 
 
 # -- flop index -------------------------------------------------------------------------
