@@ -325,3 +325,117 @@ def test_multiple_lobe_azimuth_modes_carry_no_energy(brdf):
         assert np.allclose(f.mean(axis=0), f0.mean(axis=0), rtol=1e-9, atol=1e-14)
         fw, bw = brdf(W, wi, np.stack([_dir(theta_o, 0.0), _dir(theta_o, 180.0)]), components=("multiple",))
         assert np.all(fw >= bw) and np.all(fw[bw > 0] > bw[bw > 0])
+
+
+# --- pigmented basecoat (CoatMedium): radiative transfer in the coat (issue 18) --------------
+
+def _medium(mu_a=0.0, mu_s=5e-5, g=0.6, h=2e4):
+    from nmmm.appearance.brdf import CoatMedium
+
+    return CoatMedium(W, mu_a, mu_s, g, h)
+
+
+LOSSLESS_MEDIUM = {
+    "mirror flakes in a scattering coat": PaintBRDF(ClearCoat(1.5), 1.0, FlakeLayer(_PerfectMirror(), gaussian_tilt(12), 1.5),
+                                                    medium=_medium()),
+    "mirror flakes in a band, dense white pigment, rough coat": PaintBRDF(
+        ClearCoat(1.5, 0.2), 1.0, FlakeLayer(_PerfectMirror(), gaussian_tilt(20), 3.0, (0.4, 0.9)),
+        medium=_medium(mu_s=2e-4, g=0.3)),
+    "white pigment alone (no flakes)": PaintBRDF(ClearCoat(1.5), 1.0, None, medium=_medium(mu_s=5e-4, g=0.2)),
+}
+
+
+@pytest.mark.parametrize("name", list(LOSSLESS_MEDIUM))
+@pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 80.0])
+def test_white_furnace_lossless_pigmented_coat(name, theta):
+    """A lossless effect coat (lossless pigments and flakes, white substrate) reflects all
+    the light at every incidence: brute-force hemispherical integral of evaluate."""
+    a = hemispherical_albedo(LOSSLESS_MEDIUM[name], _dir(theta, 20.0))
+    assert np.allclose(a, 1.0, atol=3e-3), a
+
+
+def _red_metallic():
+    w = np.linspace(380.0, 780.0, 41)
+    mu_a = 2e-4 * np.exp(-((w - 470.0) / 60.0) ** 2) + 1e-6  # absorbs blue-green: a red pigment
+    from nmmm.appearance.brdf import CoatMedium
+
+    med = CoatMedium(w, mu_a, 3e-5, 0.5, 2e4)
+    return metallic_paint(optical_depth=1.5, tilt=10.0, body_reflectance=0.2).with_(medium=med)
+
+
+def test_pigmented_coat_reciprocity_and_paths_agree():
+    brdf = _red_metallic()
+    rng = np.random.default_rng(5)
+    v = rng.normal(size=(2, 500, 3))
+    v[..., 2] = np.abs(v[..., 2])
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    f1, f2 = brdf(W, v[0], v[1]), brdf(W, v[1], v[0])
+    assert np.allclose(f1, f2, rtol=1e-10, atol=1e-14)
+    assert np.allclose(brdf(W, v[0], v[1], method="numpy"), f1, rtol=1e-9, atol=1e-13)
+    for theta in (0.0, 45.0, 75.0):  # energy: never above 1, the tables equal brute force
+        a = hemispherical_albedo(brdf, _dir(theta))
+        assert np.all(a <= 1.0 + 1e-3) and np.allclose(brdf.albedo(W, _dir(theta)), a, atol=3e-3)
+
+
+def test_pigments_colour_the_flake_light_and_hide_buried_flakes():
+    """The red pigment between the flakes darkens the flake lobe most in the blue-green (its
+    absorption band); flakes deeper in the coat under the same pigment reflect less."""
+    red = _red_metallic()
+    grey = metallic_paint(optical_depth=1.5, tilt=10.0, body_reflectance=0.2)
+    wi, wo = _dir(45.0, 180.0), _dir(30.0, 0.0)  # 15° aspecular
+    ratio = red(W, wi, wo, components=("flakes",)) / grey(W, wi, wo, components=("flakes",))
+    assert np.all(ratio < 1.0) and ratio[1] < ratio[-1]  # 450 nm absorbed more than 700 nm
+    fl = red.flakes
+    deep = red.with_(flakes=FlakeLayer(fl.optics, fl.tilt, fl.optical_depth, (0.5, 1.0)))
+    assert np.all(deep(W, wi, wo, components=("flakes",)) < red(W, wi, wo, components=("flakes",)))
+
+
+def test_clear_medium_is_the_paint_without_medium():
+    """A CoatMedium with no pigment gives the same single-scattering terms (to rounding) and
+    the same multiple-scattering amount (quadrature) as no medium."""
+    from nmmm.appearance.brdf import CoatMedium
+
+    m = metallic_paint()
+    m2 = m.with_(medium=CoatMedium.clear(2e4))
+    rng = np.random.default_rng(6)
+    v = rng.normal(size=(2, 300, 3))
+    v[..., 2] = np.abs(v[..., 2])
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    for comps, tol in ((("specular", "flakes", "base"), 1e-12), (COMPONENTS, 2e-3)):
+        assert np.allclose(m(W, v[0], v[1], components=comps), m2(W, v[0], v[1], components=comps), rtol=tol,
+                           atol=1e-12)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"mu_a": -1e-4}, "mu_a_per_nm and mu_s_per_nm must be >= 0"),
+    ({"g": 1.0}, "g .* must lie in"),
+    ({"h": 0.0}, "thickness_nm must be > 0"),
+])
+def test_coat_medium_bad_input(kwargs, match):
+    with pytest.raises(InvalidInputError, match=match):
+        _medium(**kwargs)
+
+
+def test_flake_depth_range_bad_input():
+    with pytest.raises(InvalidInputError, match="depth_range must satisfy 0 <= z0 < z1 <= 1"):
+        FlakeLayer(_PerfectMirror(), gaussian_tilt(10), 1.0, (0.6, 0.4))
+    with pytest.raises(InvalidInputError, match="medium must be a CoatMedium"):
+        PaintBRDF(ClearCoat(1.5), 0.5, None, medium=0.3)
+
+
+def test_coat_medium_from_layers_film_coefficients():
+    """The pigments of a nmmm.layers film (Mie hematite in a resin) as the coat medium."""
+    from nmmm.appearance.brdf import CoatMedium
+    from nmmm.layers.distributions import lognormal
+    from nmmm.layers.paint import PaintFilm, film_coefficients
+
+    film = PaintFilm(pigment=2.9 + 0.05j, binder=1.5, distribution=lognormal(250.0, 1.2, n_nodes=6),
+                     volume_fraction=0.01, thickness_nm=2e4)
+    co = film_coefficients(film, W)
+    med = CoatMedium.from_coefficients(co, 2e4)
+    ka, ks, g = med.on_grid(W)
+    assert np.allclose(ka, co.mu_a_per_nm * 2e4) and np.allclose(ks, co.mu_s_per_nm * 2e4) and np.allclose(g, co.g)
+    bare = metallic_paint(optical_depth=1.0, body_reflectance=0.3)
+    paint = bare.with_(medium=med)
+    a = paint.albedo(W, _dir(45.0))
+    assert np.all((a > 0) & (a < 1)) and not np.allclose(a, bare.albedo(W, _dir(45.0)), atol=1e-3)

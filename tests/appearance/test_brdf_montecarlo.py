@@ -225,6 +225,155 @@ def trace_paint(theta_i_deg, tau, nk_metal, tilt, rho=RHO, n=N_COAT, n_photons=2
     return out
 
 
+# --------------------------------------------------------------------------------------
+# the tracer extended to a pigmented coat (issue 18): pigments scatter (Henyey–Greenstein)
+# and absorb between and above the flakes
+
+
+def _hg_scatter(d, g, rng):
+    """New directions after Henyey–Greenstein scattering of unit directions d (N, 3)."""
+    N = d.shape[0]
+    xi = rng.random(N)
+    if abs(g) < 1e-6:
+        ct = 1.0 - 2.0 * xi
+    else:
+        ct = (1.0 + g * g - ((1.0 - g * g) / (1.0 - g + 2.0 * g * xi)) ** 2) / (2.0 * g)
+    ct = np.clip(ct, -1.0, 1.0)
+    st = np.sqrt(1.0 - ct * ct)
+    ph = 2 * np.pi * rng.random(N)
+    # an orthonormal frame around d
+    a = np.where(np.abs(d[:, 2:3]) < 0.9, np.array([[0.0, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0]]))
+    t1 = np.cross(a, d)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(d, t1)
+    return ct[:, None] * d + (st * np.cos(ph))[:, None] * t1 + (st * np.sin(ph))[:, None] * t2
+
+
+def trace_coat(theta_i_deg, tau, nk_metal, tilt, kappa_a, kappa_s, g, band=(0.0, 1.0), rho=RHO, n=N_COAT,
+               n_photons=100_000, theta_edges_deg=(), phi_edges_deg=(), seed=1, max_events=200_000):
+    """Photons in a pigmented basecoat: depth z ∈ [0, 1] (fraction of the coat), pigment of
+    vertical optical thickness κa(λ) (absorption, applied as the weight exp(−κa Δz/|u_z|)
+    along every flight) and κs (scattering, grey, Henyey–Greenstein g), flakes of optical
+    depth τ uniform in ``band``; Lambertian substrate ρ at z = 1; coat top as in
+    :func:`trace_paint`. Delta tracking with majorant (τ/Δz + κs)/|u_z| per unit z. Returns
+    the dict of :func:`trace_paint` (``single_flake``: one flake and nothing else, ``base``:
+    no flake and no pigment scattering)."""
+    rng = np.random.default_rng(seed)
+    L = np.size(nk_metal)
+    ka = np.broadcast_to(np.asarray(kappa_a, float), (L,))
+    z0, z1 = band
+    rate_f = tau / (z1 - z0)
+    maj = rate_f + kappa_s
+    N = int(n_photons)
+    te = np.radians(np.asarray(theta_edges_deg, float))
+    pe = np.asarray(phi_edges_deg, float)
+    nb_t, nb_p = max(te.size - 1, 0), max(pe.size - 1, 0)
+    ti = np.radians(theta_i_deg)
+    F_in = float(fresnel_dielectric(np.cos(ti), 1.0, n))
+    s_int = np.sin(ti) / n
+    d = np.tile([s_int, 0.0, -np.sqrt(1.0 - s_int * s_int)], (N, 1))
+    w = np.full((N, L), 1.0 - F_in)
+    z = np.zeros(N)
+    idx = np.arange(N)
+    esc_total = np.zeros((N, L))
+    n_flake = np.zeros(N, int)
+    n_pig = np.zeros(N, int)
+    n_base = np.zeros(N, int)
+    n_coat = np.zeros(N, int)
+    esc_single = np.zeros(L)
+    esc_base = np.zeros(L)
+    esc_bins = np.zeros((N, nb_t, nb_p, L)) if nb_t and nb_p else None
+    for _ in range(max_events):
+        if idx.size == 0:
+            break
+        uz = d[:, 2]
+        dzs = -np.log1p(-rng.random(idx.size)) * np.abs(uz) / maj if maj > 0 else np.full(idx.size, np.inf)
+        new = z + np.where(uz < 0, dzs, -dzs)
+        at_base = new >= 1.0
+        at_top = new <= 0.0
+        inside = ~(at_base | at_top)
+        # absorption along the flight (to the event or to the boundary)
+        flight = np.where(at_base, 1.0 - z, np.where(at_top, z, dzs)) / np.abs(uz)
+        w *= np.exp(-np.outer(flight, ka))
+        if np.any(inside):
+            k = np.flatnonzero(inside)
+            zk = new[k]
+            pig = rng.random(k.size) < kappa_s / maj
+            kp = k[pig]
+            if kp.size:
+                d[kp] = _hg_scatter(d[kp], g, rng)
+                n_pig[idx[kp]] += 1
+            kf = k[~pig & (zk >= z0) & (zk <= z1)]
+            if kf.size:
+                m = tilt.sample(kf.size, rng)
+                c = np.sum(d[kf] * m, axis=1)
+                real = rng.random(kf.size) < np.abs(c)
+                kr = kf[real]
+                if kr.size:
+                    cr, mr = c[real], m[real]
+                    d[kr] = d[kr] - 2.0 * cr[:, None] * mr
+                    w[kr] *= fresnel_metal(cr, n, nk_metal)
+                    n_flake[idx[kr]] += 1
+            z[inside] = new[inside]
+        if np.any(at_base):
+            k = np.flatnonzero(at_base)
+            u1, u2 = rng.random(k.size), rng.random(k.size)
+            r = np.sqrt(u1)
+            phi = 2 * np.pi * u2
+            d[k] = np.column_stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1.0 - u1)])
+            w[k] *= rho
+            z[k] = 1.0
+            n_base[idx[k]] += 1
+        if np.any(at_top):
+            k = np.flatnonzero(at_top)
+            dk = d[k]
+            sxy2 = n * n * (dk[:, 0] ** 2 + dk[:, 1] ** 2)
+            ok = sxy2 < 1.0
+            mu_o = np.sqrt(np.clip(1.0 - sxy2, 0.0, 1.0))
+            T = np.where(ok, 1.0 - fresnel_dielectric(mu_o, 1.0, n), 0.0)
+            out_w = w[k] * T[:, None]
+            esc_total[idx[k]] += out_w
+            gk = idx[k]
+            clean = (n_pig[gk] == 0) & (n_coat[gk] == 0)
+            esc_single += out_w[clean & (n_flake[gk] == 1) & (n_base[gk] == 0)].sum(axis=0)
+            esc_base += out_w[(n_flake[gk] == 0) & (n_pig[gk] == 0)].sum(axis=0)
+            n_coat[gk] += 1
+            if esc_bins is not None and np.any(ok):
+                th_o = np.arccos(mu_o)
+                ph_o = np.degrees(np.abs(np.arctan2(dk[:, 1], dk[:, 0])))
+                it = np.searchsorted(te, th_o, side="right") - 1
+                ip = np.searchsorted(pe, ph_o, side="right") - 1
+                good = ok & (it >= 0) & (it < nb_t) & (ip >= 0) & (ip < nb_p)
+                np.add.at(esc_bins, (idx[k][good], it[good], ip[good]), out_w[good])
+            w[k] *= (1.0 - T)[:, None]
+            d[k, 2] = -dk[:, 2]
+            z[k] = 0.0
+        wmax = w.max(axis=1)
+        low = wmax < 1e-3
+        if np.any(low):
+            kl = np.flatnonzero(low)
+            survive = rng.random(kl.size) < 0.1
+            w[kl[survive]] *= 10.0
+            w[kl[~survive]] = 0.0
+        alive = w.max(axis=1) > 0
+        if not np.all(alive):
+            idx, d, w, z = idx[alive], d[alive], w[alive], z[alive]
+    else:  # pragma: no cover
+        raise RuntimeError("photons still alive after max_events")
+    out = {
+        "albedo": F_in + esc_total.mean(axis=0),
+        "albedo_se": esc_total.std(axis=0) / np.sqrt(N),
+        "specular": np.full(L, F_in),
+        "single_flake": esc_single / N,
+        "base": esc_base / N,
+    }
+    if esc_bins is not None:
+        proj = 0.5 * (np.sin(te[1:]) ** 2 - np.sin(te[:-1]) ** 2)[:, None] * (2 * np.radians(np.diff(pe)))[None, :]
+        out["bins"] = esc_bins.mean(axis=0) / proj[..., None]
+        out["bins_se"] = esc_bins.std(axis=0) / np.sqrt(N) / proj[..., None]
+    return out
+
+
 def _wi(theta_deg):
     t = np.radians(theta_deg)
     return np.array([-np.sin(t), 0.0, np.cos(t)])  # light from φ = 180°: mirror at φ = 0°
@@ -347,3 +496,75 @@ def test_binned_brdf_near_normal_matches_mc(traces, tau):
     b = _paint(tau).bin_average(WAVELENGTHS, _wi(45.0), THETA_EDGES[:2], PHI_EDGES, n_quad=24)
     tol = N_SE * r["bins_se"][:1] + MODEL_TOL_BINS * r["bins"][:1]
     assert np.all(np.abs(b - r["bins"][:1]) < tol), (tau, b[..., 1], r["bins"][:1, :, 1])
+
+
+# --------------------------------------------------------------------------------------
+# pigments between and above the flakes (issue 18): the tracer with a pigmented basecoat
+
+H_COAT_NM = 2e4
+PIGMENT_CASES = {
+    # name: (κa(λ) at 450/550/650 nm, κs, g, flake band, τ) — κ = μ H, vertical optical thicknesses
+    "red-ish absorber, uniform": ((0.6, 0.1, 0.02), 0.8, 0.5, (0.0, 1.0), 1.0),
+    "pigment above a flake band": ((0.6, 0.1, 0.02), 0.8, 0.5, (0.3, 0.8), 1.0),
+    "dense forward scatterer": ((2.0, 0.3, 0.05), 4.0, 0.7, (0.0, 1.0), 1.5),
+}
+
+
+def _pigmented_paint(case):
+    from nmmm.appearance.brdf import ClearCoat, CoatMedium, PaintBRDF
+    from nmmm.appearance.flakes import FlakeLayer
+
+    ka, ks, g, band, tau = PIGMENT_CASES[case]
+    med = CoatMedium(WAVELENGTHS, np.asarray(ka) / H_COAT_NM, ks / H_COAT_NM, g, H_COAT_NM)
+    return PaintBRDF(ClearCoat(N_COAT), RHO, FlakeLayer(aluminium_flakes(), gaussian_tilt(SIGMA_DEG), tau, band),
+                     medium=med)
+
+
+@pytest.fixture(scope="module")
+def pigment_traces(setup):
+    nk, tilt = setup
+    out = {}
+    for i, (case, (ka, ks, g, band, tau)) in enumerate(PIGMENT_CASES.items()):
+        for th in (0.0, 45.0, 70.0):
+            edges = (THETA_EDGES, PHI_EDGES) if th == 45.0 else ((), ())
+            out[case, th] = trace_coat(th, tau, nk, tilt, np.asarray(ka), ks, g, band, n_photons=N_PHOTONS,
+                                       theta_edges_deg=edges[0], phi_edges_deg=edges[1], seed=100 + 7 * i + int(th))
+    return out
+
+
+def test_coat_tracer_without_pigment_is_the_flake_tracer(setup):
+    """trace_coat with κ = 0 and the flakes through the whole coat is trace_paint's physics:
+    the same albedo and single-scattering split within their statistical errors."""
+    nk, tilt = setup
+    a = trace_paint(45.0, 1.0, nk, tilt, n_photons=40_000, seed=11)
+    b = trace_coat(45.0, 1.0, nk, tilt, np.zeros(3), 0.0, 0.0, n_photons=40_000, seed=12)
+    for key in ("albedo", "single_flake", "base"):
+        assert np.all(np.abs(a[key] - b[key]) < N_SE * np.hypot(a["albedo_se"], b["albedo_se"]) + 1e-3), key
+
+
+@pytest.mark.parametrize("case", list(PIGMENT_CASES))
+def test_pigmented_coat_albedo_and_single_terms_match_mc(pigment_traces, case):
+    """Radiative transfer in the pigmented coat (CoatMedium): the model's one-flake and
+    substrate terms (attenuated by the pigments) and its total albedo (F_ms from
+    adding–doubling with the pigments' scattering) against the tracer. Measured: albedo
+    within 0.006 at 0/45/70°, 450–650 nm."""
+    paint = _pigmented_paint(case)
+    for th in (0.0, 45.0, 70.0):
+        r = pigment_traces[case, th]
+        a = paint.albedo(WAVELENGTHS, _wi(th))
+        assert np.all(np.abs(a - r["albedo"]) < N_SE * r["albedo_se"] + MODEL_TOL_ALBEDO), (case, th, a, r["albedo"])
+        tol = N_SE * r["albedo_se"] + 0.003
+        flakes = _hemisphere_component(paint, th, ("flakes",))
+        base = _hemisphere_component(paint, th, ("base",))
+        assert np.all(np.abs(flakes - r["single_flake"]) < tol), (case, th, flakes, r["single_flake"])
+        assert np.all(np.abs(base - r["base"]) < tol), (case, th, base, r["base"])
+
+
+@pytest.mark.parametrize("case", list(PIGMENT_CASES))
+def test_pigmented_coat_binned_brdf_matches_mc(pigment_traces, case):
+    """Every reported bin at θi = 45° (θo 0–80°, |φo| 0–180°, three wavelengths) within
+    4 SE + 10 %, as for the flakes alone (measured ≤ 9 %, mostly ≤ 5 %)."""
+    r = pigment_traces[case, 45.0]
+    b = _pigmented_paint(case).bin_average(WAVELENGTHS, _wi(45.0), THETA_EDGES, PHI_EDGES, n_quad=24)
+    tol = N_SE * r["bins_se"] + MODEL_TOL_BINS * r["bins"]
+    assert np.all(np.abs(b - r["bins"]) < tol), (case, b[..., 1], r["bins"][..., 1])

@@ -458,12 +458,17 @@ class FlakeLayer:
         area), ≥ 0. Flakes are spread uniformly in depth through the layer; a ray crossing
         the whole layer along u meets a flake with probability 1 − exp(−τ a(u)/u_z).
         Depth and diameter only matter for the discrete list (sparkle), not for this
-        mean-field BRDF.
+        mean-field BRDF — except through a pigmented coat medium.
+    depth_range : (z0, z1), default (0, 1)
+        The flakes lie uniformly between these fractions of the basecoat thickness (0: its
+        top, 1: its bottom). Only matters when the paint has a pigmented ``medium``
+        (:class:`nmmm.appearance.brdf.CoatMedium`): pigment above the band hides the flakes.
     """
 
     optics: object
     tilt: TiltDistribution
     optical_depth: float
+    depth_range: tuple = (0.0, 1.0)
 
     def __post_init__(self):
         tau = float(check_finite(self.optical_depth, "optical_depth"))
@@ -475,6 +480,15 @@ class FlakeLayer:
         if not isinstance(self.tilt, TiltDistribution):
             raise InvalidInputError("tilt must be a TiltDistribution (e.g. gaussian_tilt(10))")
         object.__setattr__(self, "optical_depth", tau)
+        try:
+            z0, z1 = (float(v) for v in self.depth_range)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"depth_range must be two fractions (z0, z1) of the coat thickness, got "
+                                    f"{self.depth_range!r}") from None
+        if not (0.0 <= z0 < z1 <= 1.0):
+            raise InvalidInputError(f"depth_range must satisfy 0 <= z0 < z1 <= 1 (fractions of the coat thickness, "
+                                    f"0 = top), got ({z0!r}, {z1!r})")
+        object.__setattr__(self, "depth_range", (z0, z1))
 
     @classmethod
     def from_volume_fraction(cls, optics, tilt, volume_fraction: float, flake_thickness_nm: float,

@@ -85,13 +85,19 @@ Modules (one per concept; every public name is importable from this package)
 - :mod:`~nmmm.appearance.brdf.multiple_scattering` — F_ms by adding–doubling (term 4);
   :mod:`~nmmm.appearance.brdf.ms_azimuth` — its azimuthal Fourier modes.
 - :mod:`~nmmm.appearance.brdf.spectral_inputs` — the base reflectance ρ(λ) on a grid.
+- :mod:`~nmmm.appearance.brdf.coat_medium` — :class:`CoatMedium`, pigments between and above
+  the flakes (μa, μs, g per nm, coat thickness); :mod:`~nmmm.appearance.brdf.effect_tables`
+  — the paint with that medium (radiative transfer in the coat, its own kernel);
+  :mod:`~nmmm.appearance.brdf.coat_transport` — adding–doubling of the pigmented coat with
+  its flake band.
 - :mod:`~nmmm.appearance.brdf.builders` — paints by family.
 - :mod:`~nmmm.appearance.brdf.discrete_flakes` — discrete flakes ↔ the statistical lobe.
 - :mod:`~nmmm.appearance.brdf.table_export` — Rusinkiewicz tables for renderers.
 
 Public objects
 --------------
-- :class:`ClearCoat`, :class:`PaintBRDF`
+- :class:`ClearCoat`, :class:`PaintBRDF`, :class:`CoatMedium` (``PaintBRDF(..., medium=)``:
+  pigments in the basecoat around the flakes, ``FlakeLayer.depth_range`` their band)
 - :func:`clear_dielectric`, :func:`opaque_paint`, :func:`metallic_paint`,
   :func:`interference_paint`, :func:`grey_metallic_paint`
 - :func:`body_reflectance_from_film`, :func:`opaque_paint_from_film` — the base from a
@@ -105,7 +111,8 @@ Public objects
 
 Limitations
 -----------
-Depolarised (unpolarised Fresnel at every interface); non-absorbing coat and binder; the
+Depolarised (unpolarised Fresnel at every interface); non-absorbing clear coat (absorption
+and scattering of the basecoat's binder and pigments go in a :class:`CoatMedium`); the
 refraction geometry uses the coat index averaged over the wavelength grid (Fresnel
 factors use n(λ)); roughness of the coat only shapes its own specular lobe (light
 enters and leaves through the mean plane); flake edges and diffraction are neglected
@@ -156,12 +163,14 @@ from nmmm.appearance.brdf.builders import (
     opaque_paint_from_film,
 )
 from nmmm.appearance.brdf.clear_coat import ClearCoat, ggx_distribution, smith_g1_ggx
+from nmmm.appearance.brdf.coat_medium import CoatMedium
 from nmmm.appearance.brdf.discrete_flakes import binned_flake_brdf, flake_list_reflection
 from nmmm.appearance.brdf.paint_brdf import COMPONENTS, PaintBRDF
 from nmmm.appearance.brdf.table_export import brdf_table, rusinkiewicz_to_directions, write_brdf_table
 
 __all__ = [
     "ClearCoat",
+    "CoatMedium",
     "PaintBRDF",
     "clear_dielectric",
     "opaque_paint",

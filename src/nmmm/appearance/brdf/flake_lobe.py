@@ -6,7 +6,10 @@ The pointwise lobe (evaluated per direction pair in :mod:`~nmmm.appearance.brdf.
 
     f_flake = T_i T_o / n² · τ p(h') R_flake(i'·h') / (4 μi' μo') · (1 − exp(−τ_e S)) / (τ_e S),
 
-S = a(i')/μi' + a(o')/μo' (see the package docstring).
+S = a(i')/μi' + a(o')/μo' (see the package docstring). In a pigmented coat medium
+(:class:`~nmmm.appearance.brdf.CoatMedium`, optical thickness κ, flakes uniform in the band
+z0 … z0 + dz of the coat) the last factor becomes the depth average
+exp(−κ z0 S') (1 − exp(−X)) / X, X = τ_e S + κ dz S', S' = 1/μi' + 1/μo'.
 
 References
 ----------
@@ -83,9 +86,17 @@ def flake_single_scattering_albedo(tab, mua, n_theta: int = 24, n_phi: int = 32)
         ck, opk, wok, wk = ck[ok], op[ok], wok[ok], wq[ok]
         S = (_lerp1(tab.a_tab, _deg(ip[2]), tab.step) / ip[2]
              + _lerp1(tab.a_tab, _deg(opk[:, 2]), tab.step) / opk[:, 2])
-        phi = tab.tau * _phi_mean(np.outer(S, tab.tau_e))  # (K, L)
         To = _lerp_table(tab.Tc, _deg(wok[:, 2]), tab.step)
-        g = (wk * ck / ip[2])[:, None] * phi * To
-        out[k] = np.sum(g * _lerp_table(tab.Rf, _deg(ck), tab.step), axis=0)
-        out0[k] = np.sum(g * _lerp_table(tab.Rf0, _deg(ck), tab.step), axis=0)
+        kap = getattr(tab, "kappa", None)
+        if kap is None:  # no pigmented medium: the same attenuation for both
+            phi = tab.tau * _phi_mean(np.outer(S, tab.tau_e))  # (K, L)
+            phi0 = phi
+        else:  # flakes uniform in the band z0..z0+dz of a coat of optical thickness κ
+            S2 = 1.0 / ip[2] + 1.0 / opk[:, 2]
+            phi, phi0 = (tab.tau * np.exp(-np.outer(S2, kv) * tab.z0)
+                         * _phi_mean(np.outer(S, tab.tau_e) + np.outer(S2, kv) * tab.dz)
+                         for kv in (tab.kappa, tab.kappa0))
+        g = (wk * ck / ip[2])[:, None] * To
+        out[k] = np.sum(g * phi * _lerp_table(tab.Rf, _deg(ck), tab.step), axis=0)
+        out0[k] = np.sum(g * phi0 * _lerp_table(tab.Rf0, _deg(ck), tab.step), axis=0)
     return out, out0

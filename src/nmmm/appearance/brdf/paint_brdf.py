@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nmmm.appearance.brdf.clear_coat import ClearCoat
+from nmmm.appearance.brdf.coat_medium import CoatMedium
 from nmmm.appearance.brdf.fused_kernel import _nb
 from nmmm.appearance.brdf.interpolation import _deg, _lerp_table
 from nmmm.appearance.brdf.ms_azimuth import add_azimuth_modes
@@ -40,12 +41,18 @@ class PaintBRDF:
     flakes : FlakeLayer or None
         Flake optics, tilt distribution and optical depth; None for a solid paint.
     name : str
+    medium : CoatMedium or None
+        The pigmented binder of the basecoat around the flakes (absorption, scattering, g,
+        thickness): radiative transfer in the coat (:mod:`~nmmm.appearance.brdf.effect_tables`).
+        ``body_reflectance`` is then the substrate (primer) under the basecoat. None: the
+        pigments act only through ``body_reflectance`` (a Lambertian base under the flakes).
     """
 
     coat: ClearCoat = field(default_factory=ClearCoat)
     body_reflectance: object = 0.0
     flakes: FlakeLayer | None = None
     name: str = "paint"
+    medium: CoatMedium | None = None
     _cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
@@ -53,10 +60,13 @@ class PaintBRDF:
             raise InvalidInputError("coat must be a ClearCoat")
         if self.flakes is not None and not isinstance(self.flakes, FlakeLayer):
             raise InvalidInputError("flakes must be a FlakeLayer or None")
+        if self.medium is not None and not isinstance(self.medium, CoatMedium):
+            raise InvalidInputError("medium must be a CoatMedium (nmmm.appearance.brdf.CoatMedium) or None")
 
     def __repr__(self):
         fl = "no flakes" if self.flakes is None else f"flakes tau={self.flakes.optical_depth:.3g} ({self.flakes.tilt.name})"
-        return f"<PaintBRDF '{self.name}': coat alpha={self.coat.roughness:g}, {fl}>"
+        med = "" if self.medium is None else f", in {self.medium!r}"
+        return f"<PaintBRDF '{self.name}': coat alpha={self.coat.roughness:g}, {fl}{med}>"
 
     # -- tables ------------------------------------------------------------------------
     def prepare(self, wavelength_nm) -> "_Tables":
@@ -67,7 +77,13 @@ class PaintBRDF:
         if tab is None:
             if len(self._cache) > 8:
                 self._cache.clear()
-            tab = _Tables(self, w)
+            banded = self.flakes is not None and self.flakes.depth_range != (0.0, 1.0)
+            if self.medium is not None or banded:
+                from nmmm.appearance.brdf.effect_tables import _EffectTables
+
+                tab = _EffectTables(self, w)
+            else:
+                tab = _Tables(self, w)
             self._cache[key] = tab
         return tab
 

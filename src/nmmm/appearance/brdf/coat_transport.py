@@ -1,0 +1,168 @@
+"""Radiative transfer in a pigmented basecoat holding a flake layer: the multiple-scattering
+amount F_ms(λ) and the azimuthal modes of its lobe for a :class:`~nmmm.appearance.brdf.PaintBRDF`
+with a :class:`~nmmm.appearance.brdf.CoatMedium`.
+
+The basecoat (vertical optical thickness κ = (μa + μs) H, Henyey–Greenstein pigments of
+asymmetry g) is cut into up to three homogeneous slabs — pigment above the flakes (0 … z0),
+the flake band (z0 … z1: oriented mirrors of optical depth τ, as in
+:mod:`~nmmm.appearance.brdf.multiple_scattering`, plus pigment), pigment below (z1 … 1) —
+each obtained by doubling (van de Hulst 1980) and added from the bottom on the Lambertian
+substrate ρ; the coat's underside mirrors the light outside the escape cone back down. The
+scattering kernels are renormalised so that a lossless slab conserves photons exactly
+(the white furnace holds by construction, as without pigments). Each azimuthal Fourier mode
+is added separately (the substrate couples only the 0th); the multiply scattered part M is
+the total minus what terms 2–3 already hold: one flake reached and left without pigment
+scattering, and light that met neither flake nor pigment.
+
+References
+----------
+- H. C. van de Hulst, *Multiple Light Scattering* (1980) — adding–doubling.
+- L. G. Henyey, J. L. Greenstein, Astrophys. J. 93 (1941) 70 — the phase function.
+- J. W. Hovenier, C. van der Mee, H. Domke, *Transfer of Polarized Light in Planetary
+  Atmospheres* (2004) §6.3 — azimuthal modes in the adding method.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nmmm.appearance.brdf.interpolation import _NA, _deg, _lerp1, _lerp_table
+from nmmm.appearance.brdf.ms_azimuth import N_MODES, flake_kernels, gauss_nodes
+
+_N_MU = 48
+_MAX_STEP = 0.03  # largest extinction per doubling seed slab
+
+
+def pigment_kernels(g, mu, sn, dmu, n_modes, n_phi=48):
+    """Henyey–Greenstein scattering per unit vertical optical depth of scatterers, Fourier
+    modes 0 … n_modes: ``P[m, up/down, j, k, L]``, mode 0 renormalised so that each column
+    scatters exactly 1/μ_k (photon conservation on the nodes)."""
+    g = np.asarray(g, float)
+    L, n = g.size, mu.size
+    ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi
+    cm = np.cos(np.outer(np.arange(n_modes + 1), ph))
+    P = np.zeros((n_modes + 1, 2, n, n, L))
+    g2 = g * g
+    for iq, q in enumerate(ph):
+        for s_out, sz in enumerate((1.0, -1.0)):
+            # travel down along k (sn_k, 0, −μ_k) → along j (sn_j cos q, sn_j sin q, sz μ_j)
+            cth = (sn[:, None] * sn[None, :] * np.cos(q) - sz * mu[:, None] * mu[None, :])[..., None]
+            p = (1 - g2) / (4 * np.pi * (1 + g2 - 2 * g * cth) ** 1.5)
+            wgt = (dmu[:, None] * 2 * np.pi / n_phi / mu[None, :])[..., None] * p
+            P[:, s_out] += cm[:, iq, None, None, None] * wgt[None]
+    col = P[0].sum(axis=(0, 1))  # (k, L)
+    P *= np.where(col > 0, (1.0 / mu)[:, None] / np.where(col > 0, col, 1.0), 0.0)[None, None, None]
+    return P
+
+
+def _slab(Ku, Kd, ext, thickness):
+    """(R, T) of a homogeneous slab, (L, j, k), from kernels per unit thickness (L, j, k) and
+    the extinction ext (L, k) per unit thickness, by doubling a thin seed slab."""
+    eye = np.eye(Ku.shape[-1])
+    emax = float(np.max(ext)) * thickness
+    nd = int(np.clip(np.ceil(np.log2(max(emax, 1e-12) / _MAX_STEP)), 4, 40))
+    d = thickness / 2.0 ** nd
+    R, T = d * Ku, d * Kd + eye[None] * (1.0 - d * ext)[:, None, :]
+    for _ in range(nd):
+        M = np.linalg.solve(eye[None] - R @ R, T)
+        R, T = R + T @ R @ M, T @ M
+    return R, T
+
+
+def _on_top(R, T, Rbelow):
+    eye = np.eye(R.shape[-1])
+    return R + T @ np.linalg.solve(eye[None] - Rbelow @ R, Rbelow @ T)
+
+
+def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
+    """F_ms(λ) of a paint with a coat medium (see the module docstring), and c_m(θi, θo) of its
+    lobe stored on ``tab._ms_modes`` ``(NA, NA, n_modes)`` for :mod:`ms_azimuth`."""
+    L, n = tab.L, tab.n
+    th, mu, sn, dmu = gauss_nodes(n_mu)
+    eye = np.eye(n_mu)
+    z0, dz = tab.z0, tab.dz
+    flakes = tab.has_flakes
+    P = pigment_kernels(tab.g_pig, mu, sn, dmu, n_modes)
+    if flakes:
+        G = flake_kernels(tab, mu, sn, dmu, n_modes)  # (M+1, up/down, actual/lossless, j, k, L)
+        eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu
+        target = eps[:, None] * (tab.tau_e / tab.tau)[None, :]  # (k, L) per unit τ
+        col0 = G[0, :, 1].sum(axis=(0, 1))
+        G *= np.where(col0 > 0, target / np.where(col0 > 0, col0, 1.0), 0.0)[None, None, None, None]
+        fext = np.moveaxis(target, -1, 0) * tab.tau  # (L, k) through the whole band
+    else:
+        fext = np.zeros((L, n_mu))
+    mu_c = np.sqrt(1 - 1 / (n * n))
+    mu_ext = np.sqrt(np.clip(1 - n * n * (1 - mu * mu), 0, 1))
+    Tint = np.where(mu[:, None] > mu_c, _lerp_table(tab.Tc, _deg(mu_ext), tab.step), 0.0).T  # (L, K)
+    D = 1.0 - Tint
+    lamb = 2 * mu * dmu
+    lamb = lamb / lamb.sum()
+    d0 = Tint * (mu * dmu)[None, :]
+    d0 = d0 / d0.sum(axis=1, keepdims=True)
+    ks = np.asarray(tab.kap_s, float)[:, None, None]
+    inv_mu = (1.0 / mu)[None, :]
+
+    def system(m, v, sel=slice(None)):
+        """Internal reflection of the whole coat (with the substrate for m = 0), mode m,
+        variant v (0 actual, 1 lossless), wavelengths ``sel``."""
+        kap = (tab.kappa if v == 0 else tab.kappa0)[sel][:, None]
+        rho = (tab.rho if v == 0 else np.ones(L))[sel]
+        Pu = np.moveaxis(P[m, 0][..., sel], -1, 0) * ks[sel]
+        Pd = np.moveaxis(P[m, 1][..., sel], -1, 0) * ks[sel]
+        Rbelow = rho[:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None] if m == 0 else 0 * Pu
+        if flakes:  # bottom first: pigment below the band, the band, pigment above it
+            Fu = np.moveaxis(G[m, 0, v][..., sel], -1, 0) * (tab.tau / dz)
+            Fd = np.moveaxis(G[m, 1, v][..., sel], -1, 0) * (tab.tau / dz)
+            layers = [(Pu, Pd, kap * inv_mu, 1.0 - z0 - dz), (Fu + Pu, Fd + Pd, fext[sel] / dz + kap * inv_mu, dz),
+                      (Pu, Pd, kap * inv_mu, z0)]
+        else:
+            layers = [(Pu, Pd, kap * inv_mu, 1.0)]
+        for Ku, Kd, ext, t in layers:
+            if t > 1e-12:
+                R, T = _slab(Ku, Kd, ext, t)
+                Rbelow = _on_top(R, T, Rbelow)
+        return Rbelow
+
+    escaped = []
+    for v in (0, 1):
+        Rtot = system(0, v)
+        u = np.linalg.solve(eye[None] - Rtot * D[:, None, :], np.einsum("ljk,lk->lj", Rtot, d0)[..., None])[..., 0]
+        escaped.append(np.sum(Tint * u, axis=1))
+    e, e0 = escaped
+    norm = np.maximum(1.0 - tab.Es_bar, 1e-12)
+    s, s0 = sub / norm, sub0 / norm
+    with np.errstate(divide="ignore", invalid="ignore"):
+        F = np.clip(np.where(e0 - s0 > 1e-12, (e - s) / (e0 - s0), 0.0), 0.0, 1.0)
+    # --- azimuthal modes of the multiply scattered part (a few wavelengths suffice: one shape)
+    sel = np.unique(np.linspace(0, L - 1, min(L, 9)).round().astype(int))
+    Ds = D[sel][:, None, :]
+    kap = tab.kappa[sel][:, None]
+    s2 = inv_mu.T + inv_mu  # (j, k) 1/μ_j + 1/μ_k
+    with_coat = lambda Rt: np.linalg.solve(eye[None] - Rt * Ds, Rt)  # noqa: E731
+    ms = []
+    for m in range(n_modes + 1):
+        Mm = with_coat(system(m, 0, sel))
+        if flakes:  # one flake, no pigment scattering, straight to the coat's underside
+            Ku = np.moveaxis(G[m, 0, 0][..., sel], -1, 0)
+            fs = fext[sel][:, :, None] + fext[sel][:, None, :]
+            x = fs + kap[:, :, None] * dz * s2[None]
+            Mm = Mm - Ku * tab.tau * np.exp(-kap[:, :, None] * z0 * s2[None]) * -np.expm1(-x) / np.where(x > 0, x, 1.0)
+        if m == 0:  # substrate seen through the coat without any scattering
+            tdir = np.exp(-fext[sel] - kap * inv_mu)
+            Rb = tab.rho[sel][:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
+            Mm = Mm - with_coat(tdir[:, :, None] * Rb * tdir[:, None, :])
+        ms.append(Mm.sum(axis=0))
+    M0 = ms[0]
+    ok = M0 > 1e-12 * np.max(np.abs(M0))
+    c = np.stack([np.where(ok, Mm / np.where(ok, M0, 1.0), 0.0) for Mm in ms[1:]])
+    c = 0.5 * (c + np.swapaxes(c, -1, -2))
+    tha = np.radians(np.linspace(0.0, 90.0, _NA))
+    thp = np.arcsin(np.clip(np.sin(tha) / n, 0, 1))
+    W = np.zeros((_NA, n_mu))
+    x = np.clip(np.interp(thp, th, np.arange(n_mu)), 0, n_mu - 1.000001)
+    i0 = x.astype(int)
+    W[np.arange(_NA), i0] = 1 - (x - i0)
+    W[np.arange(_NA), i0 + 1] += x - i0
+    tab._ms_modes = np.ascontiguousarray(np.einsum("aj,mjk,bk->abm", W, c, W)) if np.any(F > 0) else np.zeros((1, 1, 0))
+    return F

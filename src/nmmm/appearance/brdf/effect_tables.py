@@ -1,0 +1,273 @@
+"""Tables and kernel of a :class:`~nmmm.appearance.brdf.PaintBRDF` whose basecoat is a
+pigmented medium (:class:`~nmmm.appearance.brdf.CoatMedium`) holding the flakes.
+
+The terms are those of the package docstring with the pigments' extinction added on every
+path (κ = (μa + μs) H the coat's vertical optical thickness, flakes uniform in the band
+z0 … z0 + dz, internal cosines μi', μo', S' = 1/μi' + 1/μo'):
+
+- flakes: τ p(h') R / (4 μi' μo') · exp(−κ z0 S') (1 − e^−X)/X, X = τ_e S + κ dz S';
+- substrate: ρ / (π (1 − ρ r_t)) · exp(−τ_e S − κ S'), r_t with the same attenuation;
+- everything else — light scattered by the pigments (once or more), pigment–flake and
+  pigment–substrate interreflections — is the multiple-scattering lobe, its amount F_ms from
+  :func:`~nmmm.appearance.brdf.coat_transport.coat_transport` and its azimuthal modes fused
+  in the kernel. The lossless reference (white furnace) keeps the pigments' scattering and
+  drops their absorption.
+
+This is radiative transfer in the coat, not a Lambertian base under the flakes; with no
+pigment (μs = μa = 0) it reduces to the model without a medium.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
+from nmmm.appearance.brdf.coat_transport import coat_transport
+from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
+from nmmm.appearance.brdf.interpolation import _NA, _deg, _lerp1, _lerp_table, _phi_mean
+from nmmm.appearance.brdf.ms_azimuth import azimuth_factor
+from nmmm.appearance.brdf.tables import _Tables
+from nmmm.appearance.flakes import refract_in
+
+try:  # pragma: no cover - numba is a dependency, the fallback only guards odd installs
+    import numba as _nb
+except ImportError:  # pragma: no cover
+    _nb = None
+
+
+class _EffectTables(_Tables):
+    """Tables of a paint with a coat medium (same attributes as :class:`_Tables`, plus κ)."""
+
+    fuses_ms_azimuth = True
+
+    def __init__(self, paint, w):
+        med = paint.medium
+        if med is None:
+            z = np.zeros(w.size)
+            self.kap_a, self.kap_s, self.g_pig = z, z, z
+        else:
+            self.kap_a, self.kap_s, self.g_pig = med.on_grid(w)
+        self.kappa = self.kap_a + self.kap_s
+        self.kappa0 = self.kap_s.copy()
+        z0, z1 = paint.flakes.depth_range if paint.flakes is not None else (0.0, 1.0)
+        self.z0, self.dz = float(z0), float(z1 - z0)
+        super().__init__(paint, w)
+
+    def _trans(self, mu, kappa):
+        """exp(−τ_e a(μ)/μ − κ/μ) through the whole coat along internal cosines (P,) -> (P, L)."""
+        mu = np.maximum(mu, 1e-12)
+        x = np.outer(1.0 / mu, kappa)
+        if self.has_flakes:
+            x = x + np.outer(_lerp1(self.a_tab, _deg(mu), self.step) / mu, self.tau_e)
+        return np.exp(-x)
+
+    def _albedo_tables(self):
+        n, L = self.n, self.L
+        self.astep = 90.0 / (_NA - 1)
+        tha = np.linspace(0.0, 90.0, _NA)
+        mua = np.cos(np.radians(tha))
+        xg, wg = np.polynomial.legendre.leggauss(128)
+        mu_e, w_e = 0.5 * (xg + 1), 0.5 * wg
+        th_e = _deg(mu_e)
+        T_e = _lerp_table(self.Tc, th_e, self.step)
+        Es_e = _lerp_table(self.Es, th_e, self.step)
+        self.Es_bar = 2 * (w_e * mu_e) @ Es_e
+        mu_i_e = np.sqrt(1 - (1 - mu_e ** 2) / (n * n))
+        mu_c = np.sqrt(1 - 1 / (n * n))
+        xi, wi_ = 0.5 * (xg + 1) * mu_c, 0.5 * wg * mu_c
+        Ti = _lerp_table(self.Tc, tha, self.step)
+        Esi = _lerp_table(self.Es, tha, self.step)
+        mu_ii = np.sqrt(1 - (1 - mua ** 2) / (n * n))
+        fl, fl0 = flake_single_scattering_albedo(self, mua)
+        bases = []
+        for kap, rho in ((self.kappa, self.rho), (self.kappa0, np.ones(L))):
+            t_e, t_tir, t_i = self._trans(mu_i_e, kap), self._trans(xi, kap), self._trans(mu_ii, kap)
+            r_t = 2 * (wi_ * xi) @ (t_tir ** 2) + 2 / (n * n) * (w_e * mu_e) @ (t_e ** 2 * Es_e)
+            esc = 2 / (n * n) * (w_e * mu_e) @ (T_e * t_e)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                b = Ti * t_i * (rho / (1 - rho * r_t)) * esc
+            bases.append((np.where(np.isfinite(b), b, Ti), r_t))
+        (base, self.r_t), (base0, _) = bases
+        self.E1 = Esi + Ti * fl + base
+        self.E10 = Esi + Ti * fl0 + base0
+        self.E1[-1] = Esi[-1]
+        self.E10[-1] = Esi[-1]
+        self.Dms = np.clip(1.0 - self.E10, 0.0, 1.0)
+        E0_bar = 2 * (w_e * mu_e) @ _lerp_table(self.E10, th_e, self.astep)
+        sub = 2 * (w_e * mu_e) @ _lerp_table(self.E1 - Esi, th_e, self.astep)
+        sub0 = 2 * (w_e * mu_e) @ _lerp_table(self.E10 - Esi, th_e, self.astep)
+        self.Fms = coat_transport(self, sub, sub0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.Kms = np.where(1 - E0_bar > 1e-9, self.Fms / (np.pi * (1 - E0_bar)), 0.0)
+        self.E0_bar = E0_bar
+
+    # -- evaluation ------------------------------------------------------------------
+    def evaluate_fast(self, wi, wo, comps, out):
+        Rf = self.Rf if self.has_flakes else np.zeros((2, 1))
+        a_tab = self.a_tab if self.has_flakes else np.zeros(2)
+        den = self.tilt.density if self.has_flakes else np.zeros(2)
+        dstep = (self.tilt.tilt_deg[1] - self.tilt.tilt_deg[0]) if self.has_flakes else 1.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            kb = np.where(self.rho > 0, self.rho / (np.pi * (1 - self.rho * self.r_t)), 0.0)
+        C = self._ms_modes
+        do_ms = "multiple" in comps and bool(np.any(self.Kms > 0))
+        _effect_kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
+                       self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
+                       np.ascontiguousarray(self.tau_e, float), np.ascontiguousarray(self.kappa, float),
+                       self.z0, self.dz, kb, self.Dms, np.asarray(self.Kms, float), C,
+                       "specular" in comps, "flakes" in comps and self.has_flakes,
+                       "base" in comps and bool(np.any(self.rho > 0)), do_ms)
+
+    def evaluate(self, wi, wo, comps):
+        P, L = wi.shape[0], self.L
+        mi, mo = wi[:, 2], wo[:, 2]
+        valid = (mi > 0) & (mo > 0)
+        f = np.zeros((P, L))
+        if not np.all(valid):
+            if np.any(valid):
+                f[valid] = self.evaluate(wi[valid], wo[valid], comps)
+            return f
+        thi, tho = _deg(mi), _deg(mo)
+        if "specular" in comps and self.alpha > 0:
+            h = wi + wo
+            h /= np.linalg.norm(h, axis=-1, keepdims=True)
+            D = ggx_distribution(h[:, 2], self.alpha)
+            G = smith_g1_ggx(mi, self.alpha) * smith_g1_ggx(mo, self.alpha)
+            f += (D * G / (4 * mi * mo))[:, None] * _lerp_table(self.Fs, _deg(np.sum(wi * h, axis=-1)), self.step)
+        TT = _lerp_table(self.Tc, thi, self.step) * _lerp_table(self.Tc, tho, self.step) / self.n2
+        ip, op = refract_in(wi, self.n), refract_in(wo, self.n)
+        S2 = 1 / ip[:, 2] + 1 / op[:, 2]
+        if self.has_flakes:
+            S = (_lerp1(self.a_tab, _deg(ip[:, 2]), self.step) / ip[:, 2]
+                 + _lerp1(self.a_tab, _deg(op[:, 2]), self.step) / op[:, 2])
+        else:
+            S = np.zeros(P)
+        X = np.outer(S, self.tau_e) + np.outer(S2, self.kappa) * self.dz
+        if self.has_flakes and "flakes" in comps:
+            h = ip + op
+            h /= np.linalg.norm(h, axis=-1, keepdims=True)
+            g = self.tau * self.tilt.pdf(h[:, 2]) / (4 * ip[:, 2] * op[:, 2])
+            att = np.exp(-np.outer(S2, self.kappa) * self.z0) * _phi_mean(X)
+            f += TT * g[:, None] * att * _lerp_table(self.Rf, _deg(np.sum(ip * h, axis=-1)), self.step)
+        if "base" in comps and np.any(self.rho > 0):
+            kb = self.rho / (np.pi * (1 - self.rho * self.r_t))
+            f += TT * np.exp(-X - np.outer(S2, self.kappa) * (1 - self.dz)) * kb
+        if "multiple" in comps and np.any(self.Kms > 0):
+            s = azimuth_factor(self, wi, wo)
+            f += (_lerp_table(self.Dms, thi, self.astep) * _lerp_table(self.Dms, tho, self.astep) * self.Kms
+                  * (1 + s)[:, None])
+        return f
+
+
+def _pos(c, step, n_nodes):
+    x = min(np.arccos(min(max(c, 0.0), 1.0)) * (180.0 / np.pi) / step, n_nodes - 1.000001)
+    i = int(x)
+    return i, x - i
+
+
+def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kappa, z0, dz,
+                      kb, Dms, Kms, C, do_spec, do_flakes, do_base, do_ms):
+    P = wi.shape[0]
+    L = out.shape[1]
+    NT = Fs.shape[0]
+    NA = Dms.shape[0]
+    ND = den.shape[0]
+    M = C.shape[2]
+    inv_n2 = 1.0 / (n * n)
+    for p in _prange(P):
+        ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
+        ox, oy, oz = wo[p, 0], wo[p, 1], wo[p, 2]
+        if iz <= 0.0 or oz <= 0.0:
+            for l in range(L):
+                out[p, l] = 0.0
+            continue
+        i0, fi = _pos_nb(iz, step, NT)
+        o0, fo = _pos_nb(oz, step, NT)
+        ai0, fai = _pos_nb(iz, astep, NA)
+        ao0, fao = _pos_nb(oz, astep, NA)
+        spec_w = 0.0
+        d0 = 0
+        fd = 0.0
+        if do_spec and alpha > 0.0:
+            hx, hy, hz = ix + ox, iy + oy, iz + oz
+            hn = np.sqrt(hx * hx + hy * hy + hz * hz)
+            hx /= hn
+            hy /= hn
+            hz /= hn
+            a2 = alpha * alpha
+            dd = hz * hz * (a2 - 1.0) + 1.0
+            ti2 = (1.0 - iz * iz) / (iz * iz)
+            to2 = (1.0 - oz * oz) / (oz * oz)
+            G = 4.0 / ((1.0 + np.sqrt(1.0 + a2 * ti2)) * (1.0 + np.sqrt(1.0 + a2 * to2)))
+            spec_w = a2 / (np.pi * dd * dd) * G / (4.0 * iz * oz)
+            d0, fd = _pos_nb(ix * hx + iy * hy + iz * hz, step, NT)
+        ipx, ipy = ix / n, iy / n
+        ipz = np.sqrt(max(1.0 - ipx * ipx - ipy * ipy, 0.0))
+        opx, opy = ox / n, oy / n
+        opz = np.sqrt(max(1.0 - opx * opx - opy * opy, 0.0))
+        S2 = 1.0 / ipz + 1.0 / opz
+        S = 0.0
+        g = 0.0
+        c0 = 0
+        fc = 0.0
+        if tau > 0.0:
+            k0, fa = _pos_nb(ipz, step, NT)
+            a_i = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
+            k0, fa = _pos_nb(opz, step, NT)
+            a_o = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
+            S = a_i / ipz + a_o / opz
+            if do_flakes:
+                hx, hy, hz = ipx + opx, ipy + opy, ipz + opz
+                hn = np.sqrt(hx * hx + hy * hy + hz * hz)
+                hz /= hn
+                t0, ft = _pos_nb(hz, dstep, ND)
+                g = tau * (den[t0] * (1.0 - ft) + den[t0 + 1] * ft) / (4.0 * ipz * opz)
+                c0, fc = _pos_nb((ipx * hx + ipy * hy) / hn + ipz * hz, step, NT)
+        ms_f = 1.0
+        if do_ms and M > 0:
+            ri = np.sqrt(ix * ix + iy * iy)
+            ro = np.sqrt(ox * ox + oy * oy)
+            if ri > 1e-9 and ro > 1e-9:
+                cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
+                s = 0.0
+                c_prev, c_cur = 1.0, cphi
+                for m in range(M):
+                    s += c_cur * (C[ai0, ao0, m] * (1.0 - fai) * (1.0 - fao) + C[ai0, ao0 + 1, m] * (1.0 - fai) * fao
+                                  + C[ai0 + 1, ao0, m] * fai * (1.0 - fao) + C[ai0 + 1, ao0 + 1, m] * fai * fao)
+                    c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
+                ms_f = 1.0 + max(2.0 * s, -1.0)
+        for l in range(L):
+            val = 0.0
+            if spec_w > 0.0:
+                val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
+            if do_flakes or do_base:
+                x = tau_e[l] * S + kappa[l] * dz * S2
+                e = np.exp(-x)
+                sub = 0.0
+                if do_flakes and g > 0.0:
+                    ph = 1.0 - 0.5 * x if x < 1e-6 else (1.0 - e) / x
+                    if z0 > 0.0:
+                        ph *= np.exp(-kappa[l] * z0 * S2)
+                    sub += g * ph * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
+                if do_base:
+                    eb = e
+                    if dz < 1.0:
+                        eb *= np.exp(-kappa[l] * (1.0 - dz) * S2)
+                    sub += eb * kb[l]
+                if sub != 0.0:
+                    val += ((Tc[i0, l] * (1.0 - fi) + Tc[i0 + 1, l] * fi)
+                            * (Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo) * inv_n2 * sub)
+            if do_ms:
+                val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
+                        * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l] * ms_f)
+            out[p, l] = val
+
+
+if _nb is not None:
+    _pos_nb = _nb.njit(inline="always", fastmath=True, cache=True)(_pos)
+    _prange = _nb.prange
+    _effect_kernel = _nb.njit(parallel=True, fastmath=True, cache=True)(_effect_kernel_py)
+else:  # pragma: no cover
+    _pos_nb = _pos
+    _prange = range
+    _effect_kernel = _effect_kernel_py
