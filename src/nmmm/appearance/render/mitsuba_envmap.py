@@ -111,7 +111,8 @@ def register_nmmm_envmap(mi):
                 for q in range(self.k):
                     acc += c[q] * b[q]
                 vals.append(dr.maximum(acc, 0.0))
-            return mi.Spectrum(vals[0], vals[1], vals[2], vals[3])
+            value = mi.UnpolarizedSpectrum(vals[0], vals[1], vals[2], vals[3])
+            return mi.depolarizer(value) if mi.is_polarized else value  # unpolarized emission
 
         def eval(self, si, active=True):
             return self._radiance(-si.wi, si.wavelengths)

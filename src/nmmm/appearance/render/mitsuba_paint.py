@@ -20,6 +20,15 @@ weighted by the Fresnel reflectance F(θ, λ) (a 2-D texture). Sampling: the Dir
 probability ≈ F̄(θi), otherwise a cosine-weighted hemisphere (unbiased for the glossy
 flake lobe, though noisier than a lobe-matched sampler).
 
+In Mitsuba's **polarized** spectral variants (``*_spectral_polarized``) the BSDF returns Mueller
+matrices: the smooth coat's Dirac is the reflection matrix of
+:func:`nmmm.appearance.brdf.mueller.coat_reflection_mueller` (nmmm's r_s, r_p, tabulated over θ and
+λ as ratios to F: (Rs−Rp)/(Rs+Rp), 2Re(rp rs*)/(Rs+Rp), 2Im(rp rs*)/(Rs+Rp)), rotated from the plane
+of incidence to Mitsuba's Stokes bases as its ``conductor`` plugin does; the tabulated glossy and
+diffuse terms are returned as **depolarizers** (the diffuse body and the MS lobe depolarize; the
+rough coat's and the flakes' own polarization is modelled by nmmm's plate renderer,
+:mod:`nmmm.appearance.render.plate.stokes`, not by this plugin).
+
 Public objects
 --------------
 - :func:`require_mitsuba` — import Mitsuba, choose the variant, with clear errors.
@@ -61,7 +70,8 @@ __all__ = [
     "INSTALL_HINT",
 ]
 
-SUPPORTED_VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral")
+SUPPORTED_VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral", "llvm_ad_spectral_polarized",
+                      "scalar_spectral_polarized", "cuda_ad_spectral_polarized")
 INSTALL_HINT = ("pip install 'nmmm[mitsuba]'; and for the LLVM variants a system libLLVM >= 17, "
                 "e.g. apt-get install libllvm19 (Dr.Jit >= 1.0 cannot use libLLVM 15/16: 'Cannot select fmaximum')")
 _MIN_LLVM = 17
@@ -201,8 +211,15 @@ def paint_table(brdf, wavelength_nm=None, n_theta_h: int = 48, n_theta_d: int = 
     mu = np.cos(thd)[:, None] * np.ones((1, 3))
     mu[:, 0] = np.sin(thd)
     mu[:, 1] = 0.0
+    pol = np.zeros((L, 91, 3))
     if hasattr(brdf, "specular_reflectance"):
         F = np.asarray(brdf.specular_reflectance(w, np.clip(mu, 0, 1)), float)  # (91, L)
+        if np.any(F > 0) and hasattr(brdf, "coat"):
+            from nmmm.appearance.brdf.mueller import coat_reflection_mueller
+
+            M = coat_reflection_mueller(brdf.coat, w, np.clip(mu[:, 2], 0, 1))  # (91, L, 4, 4)
+            a = np.maximum(M[..., 0, 0], 1e-30)
+            pol = np.moveaxis(np.stack([M[..., 1, 0] / a, M[..., 2, 2] / a, M[..., 3, 2] / a], -1), 0, 1)
     else:
         F = np.zeros((91, L))
     return {
@@ -211,6 +228,7 @@ def paint_table(brdf, wavelength_nm=None, n_theta_h: int = 48, n_theta_d: int = 
         "basis": basis.astype(np.float32),
         "fresnel": np.ascontiguousarray(F.T, dtype=np.float32),
         "fresnel_mean": F.mean(axis=1).astype(np.float32),
+        "fresnel_polarization": np.ascontiguousarray(pol, dtype=np.float32),
         "residual": resid,
         "name": getattr(brdf, "name", "paint"),
     }
@@ -260,6 +278,8 @@ def register_nmmm_plugins(mi=None):
             self.has_delta = bool(np.any(t["fresnel"] > 0))
             self.fres = mi.Texture2f(mi.TensorXf(np.ascontiguousarray(t["fresnel"][:, :, None])))
             self.fmean = mi.Texture1f(mi.TensorXf(np.ascontiguousarray(t["fresnel_mean"][:, None])))
+            pol = t.get("fresnel_polarization", np.zeros(t["fresnel"].shape + (3,), np.float32))
+            self.fpol = mi.Texture2f(mi.TensorXf(np.ascontiguousarray(pol)))
             glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
             delta = mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.FrontSide
             self.m_components = [glossy, delta] if self.has_delta else [glossy]
@@ -280,7 +300,7 @@ def register_nmmm_plugins(mi=None):
                 for q in range(self.k):
                     acc += coeffs[q] * b[q]
                 vals.append(dr.maximum(acc, 0.0))
-            return mi.Spectrum(vals[0], vals[1], vals[2], vals[3])
+            return mi.UnpolarizedSpectrum(vals[0], vals[1], vals[2], vals[3])
 
         def _f(self, si, wo):
             wi = si.wi
@@ -310,7 +330,25 @@ def register_nmmm_plugins(mi=None):
         def _fresnel(self, cos_i, wavelengths):
             th = self._u(dr.safe_acos(cos_i) / (dr.pi / 2), 91)
             vals = [self.fres.eval(mi.Point2f(th, self._ulam(wavelengths[j])))[0] for j in range(4)]
-            return mi.Spectrum(vals[0], vals[1], vals[2], vals[3])
+            return mi.UnpolarizedSpectrum(vals[0], vals[1], vals[2], vals[3])
+
+        def _dirac_mueller(self, ctx, si, wo, cos_i):
+            """The coat's mirror reflection as a Mueller matrix in Mitsuba's Stokes bases."""
+            F = self._fresnel(cos_i, si.wavelengths)
+            th = self._u(dr.safe_acos(cos_i) / (dr.pi / 2), 91)
+            r = [self.fpol.eval(mi.Point2f(th, self._ulam(si.wavelengths[j]))) for j in range(4)]
+            b, c, s = (mi.UnpolarizedSpectrum(r[0][q], r[1][q], r[2][q], r[3][q]) * F for q in range(3))
+            z = mi.UnpolarizedSpectrum(0.0)
+            M = mi.Spectrum(F, b, z, z, b, F, z, z, z, z, c, -s, z, z, s, c)
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            wo_hat, wi_hat = (wo, si.wi) if radiance else (si.wi, wo)
+            n = mi.Vector3f(0, 0, 1)
+            s_in, s_out = dr.cross(n, -wo_hat), dr.cross(n, wi_hat)
+            collinear = dr.all(dr.abs(s_in) < 1e-7)
+            s_in = dr.select(collinear, mi.Vector3f(1, 0, 0), dr.normalize(s_in))
+            s_out = dr.select(collinear, mi.Vector3f(1, 0, 0), dr.normalize(s_out))
+            return mi.mueller.rotate_mueller_basis(M, -wo_hat, s_in, mi.mueller.stokes_basis(-wo_hat),
+                                                   wi_hat, s_out, mi.mueller.stokes_basis(wi_hat))
 
         # -- BSDF interface ---------------------------------------------------------------
         def sample(self, ctx, si, sample1, sample2, active=True):
@@ -329,14 +367,21 @@ def register_nmmm_plugins(mi=None):
             bs.sampled_type = dr.select(pick_delta, mi.UInt32(+mi.BSDFFlags.DeltaReflection),
                                         mi.UInt32(+mi.BSDFFlags.GlossyReflection))
             f = self._f(si, wo_c) * mi.Frame3f.cos_theta(wo_c) / dr.maximum(pdf_c, 1e-12)
-            fd = self._fresnel(cos_i, si.wavelengths) / dr.maximum(p_d, 1e-12)
+            if mi.is_polarized:
+                f = mi.depolarizer(f)
+                fd = self._dirac_mueller(ctx, si, wo_d, cos_i) / dr.maximum(p_d, 1e-12)
+            else:
+                fd = self._fresnel(cos_i, si.wavelengths) / dr.maximum(p_d, 1e-12)
             value = dr.select(pick_delta, fd, f)
             ok = active & (bs.pdf > 0) & (mi.Frame3f.cos_theta(bs.wo) > 0)
             return bs, dr.select(ok, value, 0.0)
 
         def eval(self, ctx, si, wo, active=True):
             ok = active & (mi.Frame3f.cos_theta(si.wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
-            return dr.select(ok, self._f(si, wo) * mi.Frame3f.cos_theta(wo), 0.0)
+            value = self._f(si, wo) * mi.Frame3f.cos_theta(wo)
+            if mi.is_polarized:
+                value = mi.depolarizer(value)
+            return dr.select(ok, value, 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
             cos_i = mi.Frame3f.cos_theta(si.wi)
