@@ -30,6 +30,9 @@ Public functions
   a disc whose brightness is its reflection seen through an angular acceptance cone), to
   connect flake lists and the metric without a full renderer.
 
+The same metric predicted from the flake statistics (number density, size, tilt, depth),
+without an image: :mod:`nmmm.appearance.sparkle_prediction`.
+
 References
 ----------
 - C. S. McCamy, "Observation and measurement of the appearance of metallic materials.
