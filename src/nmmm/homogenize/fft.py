@@ -421,7 +421,7 @@ def fft_permittivity(
     histories: list = []
     fields = np.zeros((nw, len(dirs), d) + arr.shape, dtype=dt) if return_fields else None
     previous = [None] * len(dirs)
-    keep_x = warm_start or return_fields
+    keep_x = return_fields or (warm_start and nw > 1)  # a single wavelength seeds nothing
     bar = tqdm(total=nw * len(dirs), desc="FFT homogenization", unit="solve",
                disable=(nw * len(dirs) < 4 and work["seconds"] < 60) if progress is None else not progress,
                leave=False)

@@ -11,6 +11,13 @@ its FFTs:
   Σ ε p·p (which equals pᵀ Γ ε p because Γ p = p).
 - :func:`cocg_update` — x ← x + α p, r ← r − α q, returning rᵀr and ‖r‖².
 - :func:`mean_flux` — ⟨ε (E0 + x)⟩.
+- :func:`potential` and :func:`stencil_gradient` / :func:`cocg_update_stencil` — the
+  rank-one form of Γ for the Willot operators: Γ ŵ = k s with the scalar s = kᴴ ŵ / |k|², and
+  k_j = phase(q) · D_j(q) / h_j where D_j is the symbol of a real-space finite-difference
+  stencil (forward difference for "willot2014"; the difference across the 2×2×2 voxel cube
+  for "willot2015", with phase e^{−i Σ q/2} / 8i). So one inverse FFT of the scalar potential
+  ψ = F⁻¹(phase · s) replaces the d inverse FFTs of Γ ŵ, and the gradient D ψ is taken in
+  real space — fused into the COCG update, which then reads one scalar field instead of q.
 
 Fields are stored as ``(d, N)`` arrays (d components, N voxels, C order); labels as a flat
 ``(N,)`` integer array indexing a per-phase permittivity table.
@@ -198,6 +205,133 @@ def project(F, a, b, ny, has_ny, mode):
     """
     f = _proj_par if _parallel(F) else _proj_ser
     return f(F, a, b, ny, has_ny, mode)
+
+
+def _potential(F, psi, a, b, ph):
+    """psi ← phase(q) · kᴴ F̂ / |k|² (0 at k = 0), F̂ of shape (3, N1, N2, N3); no Nyquist rule."""
+    n1, n2, n3 = F.shape[1], F.shape[2], F.shape[3]
+    for i1 in prange(n1):
+        for i2 in range(n2):
+            ab = a[0, i1] * b[1, i2]
+            ba = b[0, i1] * a[1, i2]
+            bb = b[0, i1] * b[1, i2]
+            p12 = ph[0, i1] * ph[1, i2]
+            for i3 in range(n3):
+                k1 = ab * b[2, i3]
+                k2 = ba * b[2, i3]
+                k3 = bb * a[2, i3]
+                n2k = (k1.real * k1.real + k1.imag * k1.imag + k2.real * k2.real + k2.imag * k2.imag
+                       + k3.real * k3.real + k3.imag * k3.imag)
+                s = np.conj(k1) * F[0, i1, i2, i3] + np.conj(k2) * F[1, i1, i2, i3] + np.conj(k3) * F[2, i1, i2, i3]
+                if n2k > 0.0:
+                    psi[i1, i2, i3] = (p12 * ph[2, i3]) * (s * (1.0 / n2k))
+                else:
+                    psi[i1, i2, i3] = 0
+    return psi
+
+
+@njit(inline="always")
+def _row_grad(psi, kind, i1, i2, j1, j2, g):
+    """g[:, i3] ← D ψ along the row (i1, i2, :); j1, j2 the next indices (periodic).
+
+    kind 1: forward differences (Willot et al. 2014); kind 2: differences across the voxel cube
+    x + {0, 1}³ (Willot 2015), from the four rows A = (i1, i2), B = (i1, j2), C = (j1, i2),
+    D = (j1, j2): D_1 = Σ(C + D) − Σ(A + B), D_2 = Σ(B + D) − Σ(A + C) over {i3, i3 + 1},
+    D_3 = S(i3 + 1) − S(i3) with S = A + B + C + D."""
+    n3 = psi.shape[2]
+    A = psi[i1, i2]
+    B = psi[i1, j2]
+    C = psi[j1, i2]
+    D = psi[j1, j2]
+    for i3 in range(n3):
+        j3 = i3 + 1 if i3 + 1 < n3 else 0
+        if kind == 1:
+            c = A[i3]
+            g[0, i3] = C[i3] - c
+            g[1, i3] = B[i3] - c
+            g[2, i3] = A[j3] - c
+        else:
+            a = A[i3] + A[j3]
+            b = B[i3] + B[j3]
+            c = C[i3] + C[j3]
+            d = D[i3] + D[j3]
+            g[0, i3] = (c + d) - (a + b)
+            g[1, i3] = (b + d) - (a + c)
+            g[2, i3] = (A[j3] + B[j3] + C[j3] + D[j3]) - (A[i3] + B[i3] + C[i3] + D[i3])
+
+
+def _stencil_gradient(psi, F, kind, ih):
+    """F_j ← D_j ψ / h_j, F of shape (3, N1, N2, N3)."""
+    n1, n2, n3 = psi.shape
+    for i1 in prange(n1):
+        j1 = i1 + 1 if i1 + 1 < n1 else 0
+        g = np.empty((3, n3), dtype=psi.dtype)
+        for i2 in range(n2):
+            j2 = i2 + 1 if i2 + 1 < n2 else 0
+            _row_grad(psi, kind, i1, i2, j1, j2, g)
+            for c in range(3):
+                h = ih[c]
+                for i3 in range(n3):
+                    F[c, i1, i2, i3] = g[c, i3] * h
+    return F
+
+
+def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih):
+    """x ← x + α p; r ← r − α D ψ / h (q = Γ ε p from its potential); returns (rᵀr, ‖r‖²)."""
+    n1, n2, n3 = psi.shape
+    part = np.zeros((n1, 3))
+    for i1 in prange(n1):
+        j1 = i1 + 1 if i1 + 1 < n1 else 0
+        g = np.empty((3, n3), dtype=psi.dtype)
+        rr_re = 0.0
+        rr_im = 0.0
+        nr = 0.0
+        for i2 in range(n2):
+            j2 = i2 + 1 if i2 + 1 < n2 else 0
+            _row_grad(psi, kind, i1, i2, j1, j2, g)
+            base = (i1 * n2 + i2) * n3
+            for c in range(3):
+                ah = alpha * ih[c]
+                for i3 in range(n3):
+                    i = base + i3
+                    x[c, i] = x[c, i] + alpha * p[c, i]
+                    v = r[c, i] - ah * g[c, i3]
+                    r[c, i] = v
+                    vr = v.real
+                    vi = v.imag
+                    rr_re += vr * vr - vi * vi
+                    rr_im += 2.0 * vr * vi
+                    nr += vr * vr + vi * vi
+        part[i1, 0] = rr_re
+        part[i1, 1] = rr_im
+        part[i1, 2] = nr
+    return part[:, 0].sum() + 1j * part[:, 1].sum(), part[:, 2].sum()
+
+
+_pot_par = njit(parallel=True, cache=True, fastmath=True)(_potential)
+_pot_ser = njit(cache=True, fastmath=True)(_potential)
+_sg_par = njit(parallel=True, cache=True, fastmath=True)(_stencil_gradient)
+_sg_ser = njit(cache=True, fastmath=True)(_stencil_gradient)
+_us_par = njit(parallel=True, cache=True, fastmath=True)(_cocg_update_stencil)
+_us_ser = njit(cache=True, fastmath=True)(_cocg_update_stencil)
+
+
+def potential(F, psi, a, b, ph):
+    """psi ← phase · kᴴ F̂ / |k|² on the Fourier transform F̂ (3, N1, N2, N3) of a vector field."""
+    f = _pot_par if _parallel(F) else _pot_ser
+    return f(F, psi, a, b, ph)
+
+
+def stencil_gradient(psi, F, kind, ih):
+    """F_j ← D_j ψ / h_j (kind 1: forward difference; 2: voxel-cube difference)."""
+    f = _sg_par if _parallel(F) else _sg_ser
+    return f(psi, F, kind, ih)
+
+
+def cocg_update_stencil(x, r, p, psi, alpha, kind, ih):
+    """x ← x + α p; r ← r − α D ψ / h. Returns (rᵀr, ‖r‖²)."""
+    f = _us_par if _parallel(x) else _us_ser
+    return f(x, r, p, psi, alpha, kind, ih)
 
 
 @njit(cache=True)

@@ -79,6 +79,39 @@ def _local_threads(solve):
     return wrapper
 
 
+def _stencil_form(op: GreenOperator, dtype):
+    """(kind, phase factors (3, Nmax), 1/h (3,)) when Γ of ``op`` has the rank-one stencil form
+    k_j = phase(q) D_j(q) / h_j (kernels :func:`~nmmm.homogenize.kernels.potential`): kind 1 for
+    "willot2014" (D_j = e^{iq_j} − 1, phase 1), 2 for "willot2015" (D_j = (e^{iq_j} − 1)
+    Π_{l≠j} (e^{iq_l} + 1), phase e^{−i Σ q / 2} / 8i); None otherwise (the d-FFT path is used).
+    The factors are checked against the operator's own, so a change there cannot go unnoticed."""
+    kinds = {"willot2014": 1, "willot2015": 2}
+    if op.name not in kinds or op.ndim != 3:
+        return None
+    kind = kinds[op.name]
+    nmax = max(op.shape)
+    ph = np.zeros((3, nmax), dtype=np.complex128)
+    ih = np.ones(3)
+    for j, n in enumerate(op.shape):
+        q = 2.0 * np.pi * np.arange(n) / n
+        e = np.exp(1j * q)
+        if kind == 1:
+            d_a, d_b, phase = e - 1.0, np.ones(n), np.ones(n)
+        else:
+            d_a, d_b, phase = (e - 1.0) / 2j, (e + 1.0) / 2.0, np.exp(-0.5j * q)
+        a_ref, b_ref = phase * d_a, phase * d_b
+        if n > 1:
+            ih[j] = (op.a[j][1] / a_ref[1]).real
+        if not (np.allclose(op.a[j], a_ref * ih[j], rtol=1e-12, atol=1e-12)
+                and np.allclose(op.b[j], b_ref, rtol=1e-12, atol=1e-12)):
+            return None
+        ph[j, :n] = phase
+    if kind == 2:
+        ph[0] /= 8j  # k_j = Π phase · (1/2i)(1/2)(1/2) · D_j / h_j
+    real = np.float32 if np.dtype(dtype) == np.complex64 else np.float64
+    return kind, ph.astype(dtype), ih.astype(real)
+
+
 class Problem:
     """A voxel grid, its compact labels and a Green operator, with preallocated buffers.
 
@@ -103,13 +136,33 @@ class Problem:
         self._axes = tuple(range(1, self.d + 1))
         self.q = np.zeros((self.d, self.n), dtype=self.dtype)  # work buffer
         self.projections = 0  # Numba threads: set per solve by ``_local_threads`` and restored
+        self.stencil = _stencil_form(op, self.dtype) if self.d == 3 and not self._has_ny else None
+        self.psi = np.zeros(self.shape, dtype=self.dtype) if self.stencil is not None else None
 
     # -- operators ----------------------------------------------------------------------
     def field(self) -> np.ndarray:
         return np.zeros((self.d, self.n), dtype=self.dtype)
 
+    def potential(self, F: np.ndarray) -> np.ndarray:
+        """The scalar potential ψ of Γ F (Γ F = D ψ / h, :mod:`~nmmm.homogenize.kernels`), for a
+        :attr:`stencil` operator: d forward FFTs of F (F is overwritten) and one inverse FFT."""
+        kind, ph, ih = self.stencil
+        G = F.reshape((self.d,) + self.shape)
+        Gh = scipy.fft.fftn(G, axes=self._axes, workers=self.workers, overwrite_x=True)
+        kernels.potential(Gh, self.psi, self._a, self._b, ph)
+        psi = scipy.fft.ifftn(self.psi, workers=self.workers, overwrite_x=True)
+        if psi is not self.psi and not np.shares_memory(psi, self.psi):
+            self.psi[...] = psi
+        self.projections += 1
+        return self.psi
+
     def project_inplace(self, F: np.ndarray, mode: int = 0) -> np.ndarray:
         """F ← Γ F (mode 0) or (I − 2Γ) F (mode 1), F a (d, N) real-space field; in place."""
+        if mode == 0 and self.stencil is not None:
+            kind, ph, ih = self.stencil
+            psi = self.potential(F)
+            kernels.stencil_gradient(psi, F.reshape((self.d,) + self.shape), kind, ih)
+            return F
         G = F.reshape((self.d,) + self.shape)
         Gh = scipy.fft.fftn(G, axes=self._axes, workers=self.workers, overwrite_x=True)
         kernels.project(Gh.reshape((self.d,) + self._shape3), self._a, self._b, self._ny, self._has_ny, mode)
@@ -190,7 +243,7 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
         return done
     if x0 is not None:
         # seed with γ x0, γ minimising ‖b − γ A x0‖ (never a worse start than x = 0)
-        Ax = problem.apply(x0, tab)
+        Ax = problem.apply(x0, tab, out=problem.q)  # q is free here: no extra field
         axv = Ax.reshape(-1)
         den = float(np.vdot(axv, axv).real)
         if den > 0:
@@ -210,15 +263,22 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
     converged = history[-1] <= tol
     message = ""
     it = 0
+    stencil = problem.stencil  # Willot operators: q = Γ ε p enters the update through its potential
     while not converged and it < maxiter:
         pq = kernels.direction_and_eps(p, q, r, ctype(beta), problem.labels, tab, True)
-        problem.project_inplace(q)
+        if stencil is not None:
+            psi = problem.potential(q)
+        else:
+            problem.project_inplace(q)
         it += 1
         if _bad(pq) or _bad(rho):
             message = "COCG breakdown (pᵀAp or rᵀr vanished)"
             break
         alpha = rho / pq
-        rho_new, nr = kernels.cocg_update(x, r, p, q, ctype(alpha))
+        if stencil is not None:
+            rho_new, nr = kernels.cocg_update_stencil(x, r, p, psi, ctype(alpha), stencil[0], stencil[2])
+        else:
+            rho_new, nr = kernels.cocg_update(x, r, p, q, ctype(alpha))
         res = float(np.sqrt(nr)) / nb
         history.append(res)
         if not np.isfinite(res) or res > 1e8:
