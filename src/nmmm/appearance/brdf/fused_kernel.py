@@ -30,14 +30,34 @@ else:  # pragma: no cover
     _table_pos = _table_pos_py
 
 
+def _angle_pos(x, n_nodes):
+    """Node index and fraction of position ``x`` (angle / step) on ``n_nodes`` nodes (last interval closed)."""
+    x = min(max(x, 0.0), n_nodes - 1.000001)
+    i = int(x)
+    return i, x - i
+
+
+if _nb is not None:
+    _angle_pos_nb = _nb.njit(inline="always", fastmath=True, cache=True)(_angle_pos)
+else:  # pragma: no cover
+    _angle_pos_nb = _angle_pos
+
+
 def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kb, Dms, Kms,
                do_spec, do_flakes, do_base, do_ms, tau_e_const):
+    """Per pair the geometry (table positions and per-pair weights) first, then one branch-free
+    loop over wavelengths (the terms a paint lacks enter with weight 0, ``Rf`` then a (2, L)
+    table of zeros), so that the wavelength loop vectorises."""
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
     NA = Dms.shape[0]
     ND = den.shape[0]
+    NR = Rf.shape[0]
     inv_n2 = 1.0 / (n * n)
+    deg = 180.0 / np.pi
+    w_ms = 1.0 if do_ms else 0.0
+    w_base = 1.0 if do_base else 0.0
     for p in _prange(P):
         ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
         ox, oy, oz = wo[p, 0], wo[p, 1], wo[p, 2]
@@ -45,11 +65,13 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
             for l in range(L):
                 out[p, l] = 0.0
             continue
-        # external angles -> table positions
-        i0, fi = _table_pos(iz, step, NT)
-        o0, fo = _table_pos(oz, step, NT)
-        ai0, fai = _table_pos(iz, astep, NA)
-        ao0, fao = _table_pos(oz, astep, NA)
+        # external angles -> positions on the 0.5° tables and the 2° albedo tables
+        thi = np.arccos(min(iz, 1.0)) * deg
+        tho = np.arccos(min(oz, 1.0)) * deg
+        i0, fi = _angle_pos_nb(thi / step, NT)
+        o0, fo = _angle_pos_nb(tho / step, NT)
+        ai0, fai = _angle_pos_nb(thi / astep, NA)
+        ao0, fao = _angle_pos_nb(tho / astep, NA)
         # coat specular lobe (GGX)
         spec_w = 0.0
         d0 = 0
@@ -92,39 +114,36 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
                 t0, ft = _table_pos(hz, dstep, ND)
                 pdf = den[t0] * (1.0 - ft) + den[t0 + 1] * ft
                 g = tau * pdf / (4.0 * ipz * opz)
-                c0, fc = _table_pos(cdl, step, NT)
-        # flakes that block no light (tau_e = const over wavelength): one exp per pair
-        x0 = tau_e[0] * S
-        e0 = np.exp(-x0)
-        ph0 = 1.0 - 0.5 * x0 if x0 < 1e-6 else (1.0 - e0) / x0
-        for l in range(L):
-            val = 0.0
-            if spec_w > 0.0:
-                val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
-            sub = 0.0
-            if do_flakes or do_base:
-                if tau_e_const:
-                    x = x0
-                    e = e0
-                else:
-                    x = tau_e[l] * S
-                    e = np.exp(-x)
-                if do_flakes and g > 0.0:
-                    if tau_e_const:
-                        ph = ph0
-                    else:
-                        ph = 1.0 - 0.5 * x if x < 1e-6 else (1.0 - e) / x
-                    sub += g * ph * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
-                if do_base:
-                    sub += e * kb[l]
-                if sub != 0.0:
-                    Ti = Tc[i0, l] * (1.0 - fi) + Tc[i0 + 1, l] * fi
-                    To = Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo
-                    val += Ti * To * inv_n2 * sub
-            if do_ms:
-                val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
-                        * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l])
-            out[p, l] = val
+                c0, fc = _table_pos(cdl, step, NR)
+        gi = 1.0 - fi
+        go = 1.0 - fo
+        gai = 1.0 - fai
+        gao = 1.0 - fao
+        gd = 1.0 - fd
+        gc = 1.0 - fc
+        if tau_e_const:
+            # flakes that block no light (tau_e the same at every wavelength): one exp per pair
+            x0 = tau_e[0] * S
+            e0 = np.exp(-x0)
+            ph0 = 1.0 - 0.5 * x0 if x0 < 1e-6 else (1.0 - e0) / x0
+            w_fl = g * ph0 * inv_n2
+            w_b = e0 * w_base * inv_n2
+            for l in range(L):
+                tt = (Tc[i0, l] * gi + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * go + Tc[o0 + 1, l] * fo)
+                out[p, l] = (spec_w * (Fs[d0, l] * gd + Fs[d0 + 1, l] * fd)
+                             + tt * (w_fl * (Rf[c0, l] * gc + Rf[c0 + 1, l] * fc) + w_b * kb[l])
+                             + w_ms * (Dms[ai0, l] * gai + Dms[ai0 + 1, l] * fai)
+                             * (Dms[ao0, l] * gao + Dms[ao0 + 1, l] * fao) * Kms[l])
+        else:
+            for l in range(L):
+                x = tau_e[l] * S
+                e = np.exp(-x)
+                ph = 1.0 - 0.5 * x if x < 1e-6 else (1.0 - e) / x
+                tt = (Tc[i0, l] * gi + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * go + Tc[o0 + 1, l] * fo) * inv_n2
+                out[p, l] = (spec_w * (Fs[d0, l] * gd + Fs[d0 + 1, l] * fd)
+                             + tt * (g * ph * (Rf[c0, l] * gc + Rf[c0 + 1, l] * fc) + e * w_base * kb[l])
+                             + w_ms * (Dms[ai0, l] * gai + Dms[ai0 + 1, l] * fai)
+                             * (Dms[ao0, l] * gao + Dms[ao0 + 1, l] * fao) * Kms[l])
 
 
 if _nb is not None:

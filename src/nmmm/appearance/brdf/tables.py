@@ -164,7 +164,7 @@ class _Tables:
 
     def evaluate_fast(self, wi, wo, comps, out):
         """The fused Numba kernel (same equations as :meth:`evaluate`), writing ``out``."""
-        Rf = self.Rf if self.has_flakes else np.zeros((1, 1))
+        Rf = self.Rf if self.has_flakes else np.zeros((2, self.L))  # read with weight 0
         a_tab = self.a_tab if self.has_flakes else np.zeros(2)
         den = self.tilt.density if self.has_flakes else np.zeros(2)
         dstep = (self.tilt.tilt_deg[1] - self.tilt.tilt_deg[0]) if self.has_flakes else 1.0
@@ -172,6 +172,8 @@ class _Tables:
             kb = np.where(self.rho > 0, self.rho / (np.pi * (1 - self.rho * self.r_t)), 0.0)
         do_base = "base" in comps and bool(np.any(self.rho > 0))
         do_ms = "multiple" in comps and bool(np.any(self.Kms > 0))
+        if not do_base:  # the kernel's wavelength loop reads every table with a 0/1 weight
+            kb = np.zeros(self.L)
         _kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
                 self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
                 np.ascontiguousarray(self.tau_e, float), kb, self.Dms, np.asarray(self.Kms, float),
