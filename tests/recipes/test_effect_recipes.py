@@ -133,3 +133,17 @@ def test_composition_keys_need_a_flakes_table():
                                                                                       "thickness_nm": 5}]}}}
     with pytest.raises(RecipeError, match="exactly one of 'material'"):
         parse_recipe(raw)
+
+
+def test_demo_coloured_coats_are_the_recipes():
+    """nmmm.demo.appearance builds the coloured metallic and pearl from the shipped recipes' EffectCoat: the demo's
+    multi-angle CIELAB equals the recipe run's."""
+    from nmmm.appearance.multiangle import multiangle_lab
+    from nmmm.demo.appearance import _recipe_coat
+
+    w = np.arange(380.0, 781.0, 20.0)
+    for name in ("red_metallic", "fe2o3_mica_pearl"):
+        res = _run(_raw(name))
+        g = [m["aspecular_deg"] for m in res.multiangle]
+        ref = multiangle_lab(_recipe_coat(name, w).brdf(w)[0], w, g, illuminant="D65", observer="10")
+        np.testing.assert_allclose([[m["L"], m["a"], m["b"]] for m in res.multiangle], ref.lab, rtol=0, atol=1e-9)

@@ -6,9 +6,15 @@
   image of the metallic paint's flake deposit with its sparkle/graininess metrics, and the
   metallic BRDF exported as a (θ_h, θ_d, λ) table. Returns a summary dict for the report.
 
-The grey metallic paint comes from :func:`nmmm.appearance.deposit.grey_metallic_from_deposit`
-(a :func:`nmmm.microstructure.flake_deposit` in the seed's 450 µm × 450 µm × 20 µm cell: the same
-flakes give the discrete list (sparkle) and the statistical BRDF); the solid hematite paint from
+The grey metallic paint is an :class:`nmmm.appearance.effect_coat.EffectCoat` given by its
+composition (:func:`nmmm.appearance.deposit.grey_metallic_coat`: a
+:func:`nmmm.microstructure.flake_deposit` in the seed's 450 µm × 450 µm × 20 µm cell — the same
+flakes give the discrete list (sparkle) and the statistical BRDF); it is the shipped recipe
+``grey_metallic`` with the same numbers. The coloured metallic and the coloured pearl are the
+shipped recipes ``red_metallic`` and ``fe2o3_mica_pearl`` built into the same EffectCoat
+(:func:`nmmm.recipes.effect_schema.build_effect_coat`). For each effect coat the demo shows
+composition → derived layer parameters (flakes per mm², optical depth, tilt, depth band) →
+multi-angle colour, flop index and sparkle. The solid hematite paint comes from
 :mod:`nmmm.demo.hematite`'s compounds.
 """
 
@@ -39,6 +45,49 @@ def _hematite_paint(w):
     return opaque_paint_from_film(film, w, name="solid hematite paint (7 %)")
 
 
+def _recipe_coat(name, w):
+    """A shipped effect recipe's EffectCoat (the recipe path's own object)."""
+    from nmmm.recipes.effect_schema import build_effect_coat
+    from nmmm.recipes.run import build_materials
+    from nmmm.recipes.schema import example_path, load_recipe
+
+    r = load_recipe(example_path(name))
+    return build_effect_coat(r.effect, build_materials(r, w), name=r.name)
+
+
+def _composition(coat) -> str:
+    f = coat.flakes
+    pig = ", ".join(f"{c.name} {c.fraction:g}" for c in coat.pigments) or "none"
+    mat = "layered flake (" + " / ".join(f"{getattr(la.material, 'name', 'layer')} {float(la.thickness_nm):g} nm"
+                                         for la in f.material.layers) + ")" if f.layered else str(f.material)
+    return (f"{mat}, {f.diameter_um:g}±{f.diameter_std_um:g} µm × {float(f.thickness_nm):g} nm, {f.fraction:g} of a "
+            f"{coat.coat_thickness_nm / 1e3:g} µm basecoat, tilt s = {f.tilt_std_deg:g}°; pigments: {pig}")
+
+
+def _effect_coat_rows(coats, w, wi):
+    """Composition -> derived layer -> multi-angle colour, flop, sparkle, one row per coat."""
+    from nmmm.appearance.multiangle import ASTM_E2194_ALL_ASPECULAR_DEG, multiangle_lab
+    from nmmm.appearance.sparkle import flake_glint_image, sparkle_graininess
+
+    rows, colours = [], []
+    wo15 = np.array([-np.sin(np.radians(30.0)), 0.0, np.cos(np.radians(30.0))])
+    for coat in coats:
+        paint, flakes = coat.brdf(w)
+        d = coat.derived()
+        c = multiangle_lab(paint, w, ASTM_E2194_ALL_ASPECULAR_DEG)
+        colours.append(c)
+        img = flake_glint_image(paint, flakes, np.arange(400.0, 701.0, 20.0), wi, wo15, pixel_size_um=5.0,
+                                acceptance_deg=1.5)
+        m = sparkle_graininess(img, pixel_size_um=5.0)
+        rows.append(dict(paint=coat.name, composition=_composition(coat), flakes_per_mm2=d.number_density_per_mm2,
+                         optical_depth=d.optical_depth, projected_optical_depth=d.projected_optical_depth,
+                         mean_tilt_deg=d.mean_tilt_deg, band=f"{d.depth_range[0]:.2f}-{d.depth_range[1]:.2f}",
+                         **{f"L{g:g}": float(L) for g, L in zip(c.aspecular_deg, c.L)},
+                         a45=c.lab[2, 1], b45=c.lab[2, 2], flop_index=c.flop_index(),
+                         sparkles_per_mm2_15=m.density_per_mm2, sparkle_intensity_15=m.sparkle_intensity))
+    return rows, colours
+
+
 def _write_csv(path, rows):
     with open(path, "w", newline="") as fh:
         wr = csv.DictWriter(fh, fieldnames=list(rows[0]))
@@ -66,7 +115,7 @@ def demo(output_dir) -> dict:
     figures, tables = [], {}
 
     # 1. grey metallic paint: multi-angle colour -------------------------------------
-    metallic, flakes = grey_metallic_from_deposit()
+    metallic, flakes = grey_metallic_from_deposit(wavelength_nm=w)
     cm = multiangle_lab(metallic, w, ASTM_E2539_ASPECULAR_DEG)
     fi = cm.flop_index()
     rows = cm.table()
@@ -134,7 +183,18 @@ def demo(output_dir) -> dict:
     _write_csv(out / "grey_metallic_sparkle.csv", sp_rows)
     tables["sparkle of the grey metallic paint (5 µm pixels)"] = sp_rows
 
-    # 5. BRDF table for renderers ------------------------------------------------------
+    # 5. effect coats from their composition: derived layer, colour, flop, sparkle -------
+    from nmmm.appearance.deposit import grey_metallic_coat
+
+    coats = [grey_metallic_coat(), _recipe_coat("red_metallic", w), _recipe_coat("fe2o3_mica_pearl", w)]
+    ec_rows, ec_colours = _effect_coat_rows(coats, w, wi)
+    _write_csv(out / "effect_coats.csv", ec_rows)
+    tables["effect coats: composition → derived flake layer → CIELAB (D65/10°, 45° illumination), flop, sparkle"] = ec_rows
+    p = out / "effect_coats_colour_travel.png"
+    plot_colour_travel(ec_colours, p, title="Effect coats from their composition (ASTM E2194 angles)")
+    figures.append(str(p))
+
+    # 6. BRDF table for renderers ------------------------------------------------------
     tpath = write_brdf_table(out / "grey_metallic_brdf_table.nc", metallic, np.arange(400.0, 701.0, 20.0),
                              n_theta_h=45, n_theta_d=45, n_phi_d=12)
 
@@ -148,6 +208,10 @@ def demo(output_dir) -> dict:
         f"has flop index {cs.flop_index():.2f}. "
         f"Interference paints (seed example 4) change hue with angle: {ci_txt}. "
         f"The same flake list gives the sparkle images and, averaged, the statistical BRDF. "
+        f"Effect coats from their composition (flakes, pigments, binder, coat thickness -> derived flake layer): "
+        + "; ".join(f"{r['paint']}: τ = {r['optical_depth']:.2f}, {r['flakes_per_mm2']:.0f} flakes/mm², "
+                    f"L*15/45/110 = {r['L15']:.0f}/{r['L45']:.0f}/{r['L110']:.0f}, flop index {r['flop_index']:.1f}"
+                    for r in ec_rows) + ". "
         f"BRDF table: {tpath.name} (θ_h, θ_d, λ). Runtime {time.time() - t0:.0f} s."
     )
     return {"title": "Appearance: BRDFs, multi-angle colour and sparkle of effect paints", "figures": figures,
