@@ -354,11 +354,13 @@ def _effect(recipe, mats, w, res):
                              f"{recipe.image.wall_reflectance:g}, {recipe.image.scene}), tone-mapped.")
         elif recipe.image.renderer == "auto":
             try:
-                images = _stereo_rendered(recipe, brdf, w, res.spectral_images)
+                images = _stereo_rendered(recipe, brdf, w, res.spectral_images, coat=coat)
+                cell_um, dia_um = ((coat.cell_nm[0] / 1e3, coat.flakes.diameter_um) if coat is not None
+                                   else (recipe.image.cell_um, recipe.image.flake_diameter_um))
                 res.notes.append(
                     "Images: nmmm.appearance.render — the plate tiled with a "
-                    f"{recipe.image.cell_um:g} µm unit cell of discrete flakes (mean diameter "
-                    f"{recipe.image.flake_diameter_um:g} µm) whose glints differ between the eyes, under a point light.")
+                    f"{cell_um:g} µm unit cell of discrete flakes (mean diameter "
+                    f"{dia_um:g} µm) whose glints differ between the eyes, under a point light.")
             except ImportError:
                 images = None
         if images is None:
@@ -374,9 +376,10 @@ def _eye_positions_cm(im):
     return centre
 
 
-def _stereo_rendered(recipe, brdf, w, keep: dict):
+def _stereo_rendered(recipe, brdf, w, keep: dict, coat=None):
     """Stereo pair by :func:`nmmm.appearance.render.render_stereo_plate` with a tiled cell of
-    discrete flakes (the seed paper's plate of unit cells)."""
+    discrete flakes (the seed paper's plate of unit cells): an effect coat's own flakes (its
+    deposit) when given by composition, else flakes drawn at the BRDF's optical depth."""
     from nmmm.appearance.flakes import FlakeList
     from nmmm.appearance.render import PaintedPlate, PointLight, render_plate, render_stereo_plate
 
@@ -385,10 +388,10 @@ def _stereo_rendered(recipe, brdf, w, keep: dict):
     cell = im.cell_um * 1e3
     d = im.flake_diameter_um * 1e3
     cv = 0.3
-    n = max(1, int(round(e.optical_depth * cell * cell / (np.pi * d * d / 4 * (1 + cv**2)))))
-    fl = FlakeList.random(brdf.flakes.optics, brdf.flakes.tilt, n, region_nm=(cell, cell), mean_diameter_nm=d,
-                          diameter_cv=cv, depth_range_nm=(2e3, 18e3), n_binder=e.coat_index,
-                          rng=im.seed)
+    n = max(1, int(round(brdf.flakes.optical_depth * cell * cell / (np.pi * d * d / 4 * (1 + cv**2)))))
+    fl = coat.flake_list() if coat is not None else FlakeList.random(
+        brdf.flakes.optics, brdf.flakes.tilt, n, region_nm=(cell, cell), mean_diameter_nm=d, diameter_cv=cv,
+        depth_range_nm=(2e3, 18e3), n_binder=e.coat_index, rng=im.seed)
     plate = PaintedPlate(brdf, fl, (im.plate_cm[0] * 10.0, im.plate_cm[1] * 10.0))
     centre = _eye_positions_cm(im) * 10.0
     light = PointLight(tuple(np.asarray(im.light_position_cm, float) * 10.0), recipe.lighting.illuminants[0])
