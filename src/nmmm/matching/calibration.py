@@ -217,11 +217,11 @@ def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, lef
     if missing:
         raise InvalidInputError(f"left_out names {missing}, not among the samples {names}")
     used = [p for p in prepared if p.name not in left_out]
+    window = _check_ladder(prepared, used, compound, fit) if used else None
     n_data = sum(p.w.size for p in used if p.amount > 0)
     if not used or n_data <= len(fit):
-        raise InvalidInputError(f"{len(fit)} unknowns from {n_data} measured values in {len(used)} fitted sample(s): "
-                                "more unknowns than data — measure more samples or fit fewer parameters")
-    window = _check_ladder(prepared, used, compound, fit)
+        raise InvalidInputError(f"{len(fit)} unknowns from {n_data} measured values in {len(used)} fitted sample(s) that "
+                                f"hold {compound!r}: more unknowns than data — measure more samples or fit fewer parameters")
     shared = {}
     for p in prepared:
         p.window, p.cache = window, shared

@@ -188,7 +188,8 @@ def calibrate(ladder, output, illuminant, mode="physical", fit_names=None):
             write_calibrated_material(res, tmp / mat, step_nm=5.0, source=Path(ladder).name)
             (tmp / "calibrated_recipe.toml").write_text(_calibrated_recipe(samples, compound, mat, res.values), encoding="utf-8")
             info.update(values=res.values, standard_errors=res.standard_errors, fit=list(fit), material_file=mat,
-                        model_evaluations=res.evaluations, time_s_physical=res.time_s,
+                        de00_before=res.de00_before, de00_after=res.de00_after,
+                        model_evaluations=res.evaluations, time_s=res.time_s,
                         correlation=_correlation(res.covariance).tolist())
         if emp is not None:
             _write_rows(tmp / "km_constants.csv", emp.table())
