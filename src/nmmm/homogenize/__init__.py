@@ -4,6 +4,8 @@ Public API
 ----------
 - :func:`fft_permittivity` — labels + {label: ε} -> :class:`FFTHomogenization`
   (``.tensor``, ``.iterations``, residual histories, local fields on request).
+- :func:`fft_permittivity_spectrum` — the same over a spectrum, chunks of wavelengths on a Dask
+  cluster (local by default, or a scheduler address), warm starts along each chunk.
 - :func:`homogenize` — Microstructure + {phase: Material} -> :class:`HomogenizedMaterial`
   (a :class:`nmmm.materials.material.DerivedMaterial`, possibly anisotropic).
 - :func:`extrapolate_resolution`, :func:`richardson` — first-order extrapolation to zero voxel size.
@@ -45,6 +47,7 @@ Known limitations
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
+from nmmm.homogenize.spectral_batches import fft_permittivity_spectrum
 from nmmm.homogenize.material import HomogenizedMaterial, apparent_property, homogenize
 from nmmm.homogenize.resolution import ResolutionStudy, extrapolate_resolution, richardson
 from nmmm.homogenize.green import GREEN_OPERATORS, GreenOperator, green_operator
@@ -61,6 +64,7 @@ from nmmm.homogenize.validity import (
 
 __all__ = [
     "fft_permittivity",
+    "fft_permittivity_spectrum",
     "FFTHomogenization",
     "homogenize",
     "HomogenizedMaterial",

@@ -269,6 +269,7 @@ def fft_permittivity(
     max_memory_gb: float | None = None,
     max_minutes: float | None = None,
     work_advice: str | None = None,
+    _decide_on=None,
 ) -> FFTHomogenization:
     """Effective permittivity tensor of a periodic voxel microstructure (FFT, quasi-static).
 
@@ -378,9 +379,12 @@ def fft_permittivity(
         raise InvalidInputError(f"unknown solver {solver!r}; choose one of {sorted(SOLVERS)}")
     compact, values, counts = _compact_labels(arr)
     table, scalar = _eps_table(values, eps, wavelength_nm)
+    # the automatic choices look at the whole spectrum; a chunk of it (spectral_batches) passes the
+    # whole table in ``_decide_on`` so that every chunk takes the same operator and precision
+    decide = table if _decide_on is None else np.asarray(_decide_on)
     promoted = None
     if (green is None and dt == np.complex64 and tol < COMPLEX64_METAL_TOL and arr.ndim == 3
-            and metal_dielectric(table, LOW_LOSS)):
+            and metal_dielectric(decide, LOW_LOSS)):
         dt = np.dtype(np.complex128)
         promoted = {"what": "dtype", "from": "complex64", "to": "complex128",
                     "reason": f"3-D cell with a low-loss metal: complex64 COCG stalls above tol={tol:g} there "
@@ -405,7 +409,7 @@ def fft_permittivity(
     switches: list = []
     auto = green is None
     if auto:
-        green, reason = auto_green(arr.ndim, table)
+        green, reason = auto_green(arr.ndim, decide)
         if green != AUTO_GREEN:
             switches.append({"what": "green", "from": AUTO_GREEN, "to": green, "reason": reason})
         if promoted is not None:

@@ -1,0 +1,148 @@
+"""The wavelengths of one FFT homogenization spread over a Dask cluster.
+
+- :func:`fft_permittivity_spectrum` — :func:`~nmmm.homogenize.fft.fft_permittivity` over a
+  spectrum, the wavelengths cut into contiguous chunks, one task per chunk on a Dask cluster
+  (a ``LocalCluster`` of single-threaded worker processes by default, or a running scheduler
+  ``tcp://HOST:8786``, as ``nmmm sweep`` does); each task keeps the warm starts along its
+  chunk; the chunks' results are joined into one :class:`~nmmm.homogenize.fft.FFTHomogenization`.
+
+Every chunk takes the automatic choices (Green operator, precision) of the *whole* spectrum, so
+ε_eff(λ) has no jump at a chunk boundary; a chunk starts cold, so it pays the first
+wavelength's projections once (the price of the split: n_chunks − 1 cold starts). The cell's
+labels travel once to each worker (scattered), not once per task.
+
+What it gives (benchmarks/bench_fft_metals.py ``--spectrum N --scheduler local``): the solves
+of different wavelengths are independent, so k workers divide the wall time by about k when the
+machine has k free cores, less the cold starts (one per chunk) and the start of the cluster
+(a few seconds); on a cluster each worker needs the cell's memory (d + 1 vector fields).
+"""
+
+from __future__ import annotations
+
+import time
+import uuid
+
+import numpy as np
+
+from nmmm.errors import InvalidInputError
+
+
+def _chunk_bounds(n: int, k: int) -> list[tuple[int, int]]:
+    k = max(1, min(int(k), n))
+    edges = np.linspace(0, n, k + 1).round().astype(int)
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def _solve_chunk(labels, eps_chunk, lo, hi, wavelength_nm, kwargs):
+    """One task: fft_permittivity on wavelengths lo..hi−1 (warm starts along the chunk)."""
+    from nmmm.homogenize.fft import fft_permittivity
+
+    t = time.perf_counter()
+    w = None if wavelength_nm is None else np.asarray(wavelength_nm)[lo:hi]
+    r = fft_permittivity(labels, eps_chunk, wavelength_nm=w, progress=False, **kwargs)
+    return lo, hi, r, time.perf_counter() - t
+
+
+def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str | None = None,
+                              n_workers: int = 2, client=None, n_chunks: int | None = None,
+                              **kwargs):
+    """:func:`~nmmm.homogenize.fft.fft_permittivity` over a spectrum, one Dask task per chunk of
+    contiguous wavelengths.
+
+    Parameters
+    ----------
+    labels, eps, wavelength_nm
+        As for :func:`~nmmm.homogenize.fft.fft_permittivity`; ``eps`` must vary over wavelength
+        (arrays of one length, or Materials with ``wavelength_nm``).
+    scheduler : str, optional
+        ``"tcp://HOST:8786"`` of a running Dask scheduler; None: a ``LocalCluster`` of
+        ``n_workers`` single-threaded worker processes, closed afterwards.
+    n_workers : int
+        Workers of the local cluster.
+    client : dask.distributed.Client, optional
+        An existing client (overrides ``scheduler``).
+    n_chunks : int, optional
+        Chunks of wavelengths (default: the number of workers); each is one task with warm
+        starts along it.
+    **kwargs
+        Passed to :func:`~nmmm.homogenize.fft.fft_permittivity` (``workers`` defaults to 1
+        thread per task here).
+
+    Returns
+    -------
+    FFTHomogenization
+        As from one call, with ``metadata["chunks"]``: per chunk (first, last + 1, seconds).
+    """
+    from nmmm.homogenize.fft import FFTHomogenization, _as_label_array, _compact_labels, _eps_table
+
+    for bad in ("return_fields",):
+        if kwargs.get(bad):
+            raise InvalidInputError(f"{bad}=True is not supported over a cluster (the fields stay on the workers); "
+                                    "call fft_permittivity for the fields")
+    arr, _ = _as_label_array(labels)
+    compact, values, _ = _compact_labels(arr)
+    table, scalar = _eps_table(values, eps, wavelength_nm)
+    if scalar:
+        raise InvalidInputError("fft_permittivity_spectrum needs permittivities over wavelength (1-D arrays or "
+                                "Materials with wavelength_nm); for one wavelength call fft_permittivity")
+    nw = table.shape[0]
+    by_label = {int(v): table[:, i] for i, v in enumerate(values)}
+    kwargs.setdefault("workers", 1)
+    kwargs["_decide_on"] = table
+    from dask.distributed import Client, LocalCluster
+
+    own_cluster = own_client = None
+    try:
+        if client is None:
+            if scheduler:
+                try:
+                    client = own_client = Client(scheduler)
+                except (OSError, TimeoutError, ValueError) as exc:
+                    raise InvalidInputError(
+                        f"scheduler {scheduler!r}: no Dask scheduler could be reached ({exc}); start one with "
+                        "'dask scheduler' (and workers with 'dask worker ADDRESS'), give its tcp://HOST:8786 "
+                        "address, or leave scheduler out for a local cluster") from None
+            else:
+                import logging
+
+                own_cluster = LocalCluster(n_workers=int(n_workers), threads_per_worker=1, processes=True,
+                                           dashboard_address=None, silence_logs=logging.ERROR)
+                client = own_client = Client(own_cluster)
+        k = n_chunks or max(1, len(client.scheduler_info().get("workers", {})) or int(n_workers))
+        bounds = _chunk_bounds(nw, k)
+        # hash=False and a fresh key per call: a later call on the same cell must not meet the keys
+        # of this one being released
+        lab_f = client.scatter(labels if hasattr(labels, "labels") else arr, broadcast=True, hash=False)
+        tag = uuid.uuid4().hex[:8]
+        futs = [client.submit(_solve_chunk, lab_f, {v: e[lo:hi] for v, e in by_label.items()}, lo, hi,
+                              wavelength_nm, kwargs, pure=False, key=f"nmmm-fft-chunk-{lo}-{hi}-{tag}")
+                for lo, hi in bounds]
+        parts = sorted(client.gather(futs), key=lambda p: p[0])
+    finally:
+        if own_client is not None:
+            own_client.close()
+        if own_cluster is not None:
+            own_cluster.close()
+    rs = [p[2] for p in parts]
+    switches = []
+    for lo, _, r, _ in parts:
+        for s in r.switches:
+            s = dict(s)
+            if "wavelength_index" in s:
+                s["wavelength_index"] += lo
+            elif lo > 0:
+                continue  # the whole-spectrum choices: once
+            switches.append(s)
+    meta = dict(rs[0].metadata)
+    meta["green_used"] = np.concatenate([r.metadata["green_used"] for r in rs])
+    meta["chunks"] = [(lo, hi, sec) for lo, hi, _, sec in parts]
+    return FFTHomogenization(
+        tensor=np.concatenate([r.tensor for r in rs]),
+        iterations=np.concatenate([r.iterations for r in rs]),
+        residual_history=[h for r in rs for h in r.residual_history],
+        solver=np.concatenate([r.solver for r in rs]),
+        green=rs[0].green, fractions=rs[0].fractions, directions=rs[0].directions, shape=rs[0].shape,
+        dtype=rs[0].dtype, fields=None, metadata=meta, switches=tuple(switches))
+
+
+__all__ = ["fft_permittivity_spectrum"]

@@ -1,0 +1,57 @@
+"""Spectral batches on Dask: the chunked spectrum equals the one-process spectrum."""
+
+import logging
+
+import numpy as np
+import pytest
+
+from nmmm.errors import InvalidInputError
+from nmmm.homogenize import fft_permittivity, fft_permittivity_spectrum
+from nmmm.homogenize import geometries as G
+
+distributed = pytest.importorskip("dask.distributed")
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                       dashboard_address=None, silence_logs=logging.ERROR)
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def test_chunks_reproduce_the_serial_spectrum(client):
+    lab = G.boolean_spheres(16, 0.2, 2.5, ndim=3, seed=2)
+    eps_m = np.linspace(-50 + 20j, -10 + 2j, 7)
+    eps = {0: 2.25, 1: eps_m}
+    ref = fft_permittivity(lab, eps, tol=1e-8)
+    r = fft_permittivity_spectrum(lab, eps, client=client, tol=1e-8)
+    assert r.tensor.shape == ref.tensor.shape == (7, 3, 3)
+    assert np.abs(r.tensor - ref.tensor).max() <= 1e-6 * np.abs(ref.tensor).max()
+    assert r.iterations.shape == (7, 3) and len(r.residual_history) == 7
+    chunks = r.metadata["chunks"]
+    assert [c[:2] for c in chunks] == [(0, 4), (4, 7)]
+    assert r.green == ref.green and r.switches == ref.switches
+
+
+def test_every_chunk_takes_the_whole_spectrum_choice(client):
+    """A low-loss metal at one end of the spectrum only: both chunks use the operator the whole
+    spectrum asks for (no jump of ε_eff at the chunk boundary)."""
+    lab = G.boolean_spheres(16, 0.2, 2.5, ndim=3, seed=2)
+    eps_m = np.array([-50 + 20j, -45 + 18j, -40 + 15j, -50 + 2j])  # only the last is low-loss
+    r = fft_permittivity_spectrum(lab, {0: 2.25, 1: eps_m}, client=client, n_chunks=2, directions=[0])
+    ref = fft_permittivity(lab, {0: 2.25, 1: eps_m}, directions=[0])
+    assert r.green == ref.green == "willot2014"
+    assert set(r.metadata["green_used"].ravel()) == {"willot2014"}
+    assert np.abs(r.tensor[:, 0, 0] - ref.tensor[:, 0, 0]).max() <= 1e-4 * np.abs(ref.tensor[:, 0, 0]).max()
+
+
+def test_refuses_a_single_wavelength_and_fields(client):
+    lab = G.boolean_spheres(8, 0.2, 2.0, ndim=3, seed=2)
+    with pytest.raises(InvalidInputError, match="over wavelength"):
+        fft_permittivity_spectrum(lab, {0: 2.25, 1: -50 + 20j}, client=client)
+    with pytest.raises(InvalidInputError, match="return_fields"):
+        fft_permittivity_spectrum(lab, {0: 2.25, 1: np.array([-50 + 20j, -40 + 5j])}, client=client,
+                                  return_fields=True)
