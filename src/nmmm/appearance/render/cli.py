@@ -241,7 +241,7 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
         if stokes:
             files.append(str(st.write_exr(f"{output}{suffix}_stokes.exr")))
         pol[suffix.lstrip("_") or "mono"] = {"polarizer_deg": polarizer_deg, "plate_mean_dolp": round(float(
-            st.degree_of_polarization()[st.on_plate].mean()), 5), "glints_polarized": False}
+            st.degree_of_polarization()[st.on_plate].mean()), 5), "glints_polarized": st.metadata["glints_polarized"]}
     click.echo(json.dumps({"plate": repr(plate), "files": files,
                            "glints": {k or "mono": v.metadata["n_glints"] for k, v in named.items()},
                            "display": display, **({"polarization": pol} if pol else {})}, indent=1))

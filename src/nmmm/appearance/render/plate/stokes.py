@@ -20,8 +20,10 @@ chain, normalised to that column's S0 (so that S0 stays the unpolarized renderer
 
 The **diffuse body and the multiple-scattering lobe are depolarizing**: they add to S0 only (their
 light crossed the coat twice, whose small diattenuation is neglected). The discrete flakes' glints
-(a plate with a flake cell) are added to S0 **unpolarized** (their polarization is not modelled
-yet; the statistical flake term's is, on a plate without a flake cell).
+(a plate with a flake cell) carry the flake chain's Stokes state at their pixel: a flake glints
+only when its normal is the binder half vector of (ωi, ωo), so the chain above, evaluated at that
+half vector, is the glint's (within the glint spread); the glints of each light are drawn a second
+time alone (deterministic: the same flakes) to weight its state.
 
 Stokes frame of each pixel: x = the image's right axis, y = its up axis (both projected
 perpendicular to the ray; (x, y, propagation towards the camera) right-handed). A linear polarizer
@@ -96,11 +98,7 @@ def _polarized_terms(brdf, w, wi, wo, xcam, flakes: bool = True):
     """Stokes BRDF (N, L, 4) (1/sr; S0 = the unpolarized term) of the coat's GGX lobe plus, with
     ``flakes``, the statistical flake term, for unpolarized light from ``wi`` seen along ``wo``
     (N, 3), in the frame whose x axis is ``xcam`` (N, 3) (perpendicular to ``wo``)."""
-    from nmmm.appearance.brdf.mueller import (
-        coat_reflection_mueller,
-        coat_transmission_mueller,
-        flake_reflection_mueller,
-    )
+    from nmmm.appearance.brdf.mueller import coat_reflection_mueller
 
     coat = brdf.coat
     N, L = wi.shape[0], w.size
@@ -117,26 +115,39 @@ def _polarized_terms(brdf, w, wi, wo, xcam, flakes: bool = True):
     fl = getattr(brdf, "flakes", None)
     if flakes and fl is not None and fl.optical_depth > 0:
         f = brdf.evaluate(w, wi, wo, components=("flakes",), below_surface="zero")
-        n = float(np.mean(coat.index(w)))  # the BRDF's geometry index (as its tables)
-
-        def inside(v):
-            t = v[:, :2] / n
-            return np.concatenate([t, np.sqrt(np.clip(1 - np.sum(t * t, axis=1, keepdims=True), 0, 1))], axis=1)
-
-        wi_b, wo_b = inside(wi), inside(wo)
-        m = _unit(wi_b + wo_b, nvec)
-        cl = np.clip(np.einsum("nk,nk->n", wi_b, m), 0.0, 1.0)
-        S = coat_transmission_mueller(coat, w, np.clip(wi[:, 2], 0, 1), into_coat=True)[..., :, 0]
-        k1 = -wi_b  # propagation towards the flake
-        s1 = _axis(nvec[None, :], wi, k1)
-        s2 = _axis(wi_b, wo_b, k1)
-        S = _apply(flake_reflection_mueller(fl.optics, w, cl, n), _rotate(S, s1, s2, k1))
-        s3 = _axis(nvec[None, :], wo_b, wo_b)
-        S = _apply(coat_transmission_mueller(coat, w, np.clip(wo_b[:, 2], 0, 1), into_coat=False),
-                   _rotate(S, s2, s3, wo_b))
-        S = _rotate(_normalised(S), s3, xcam, wo)
-        out += f[..., None] * S
+        out += f[..., None] * _flake_chain(brdf, w, wi, wo, xcam)
     return out
+
+
+def _flake_chain(brdf, w, wi, wo, xcam):
+    """Normalised Stokes (N, L, 4) of unpolarized light from ``wi`` mirrored towards ``wo`` by a
+    flake whose normal is the binder half vector: coat transmission in, flake reflection, coat
+    transmission out, each in its plane of incidence (the Mueller chain of every glinting flake)."""
+    from nmmm.appearance.brdf.mueller import (
+        coat_transmission_mueller,
+        flake_reflection_mueller,
+    )
+
+    coat, fl = brdf.coat, brdf.flakes
+    nvec = np.array([0.0, 0.0, 1.0])
+    n = float(np.mean(coat.index(w)))  # the BRDF's geometry index (as its tables)
+
+    def inside(v):
+        t = v[:, :2] / n
+        return np.concatenate([t, np.sqrt(np.clip(1 - np.sum(t * t, axis=1, keepdims=True), 0, 1))], axis=1)
+
+    wi_b, wo_b = inside(wi), inside(wo)
+    m = _unit(wi_b + wo_b, nvec)
+    cl = np.clip(np.einsum("nk,nk->n", wi_b, m), 0.0, 1.0)
+    S = coat_transmission_mueller(coat, w, np.clip(wi[:, 2], 0, 1), into_coat=True)[..., :, 0]
+    k1 = -wi_b  # propagation towards the flake
+    s1 = _axis(nvec[None, :], wi, k1)
+    s2 = _axis(wi_b, wo_b, k1)
+    S = _apply(flake_reflection_mueller(fl.optics, w, cl, n), _rotate(S, s1, s2, k1))
+    s3 = _axis(nvec[None, :], wo_b, wo_b)
+    S = _apply(coat_transmission_mueller(coat, w, np.clip(wo_b[:, 2], 0, 1), into_coat=False),
+               _rotate(S, s2, s3, wo_b))
+    return _rotate(_normalised(S), s3, xcam, wo)
 
 
 def _dirac_stokes(brdf, w, wo, xcam):
@@ -295,6 +306,17 @@ def render_plate_stokes(plate, camera, lights=(), environment=None, wavelength_n
     for lt, sp in zip(lights, spectra):
         wi, s = _light_at(lt, P[on])
         pol += _polarized_terms(brdf, w, wi, wo, xc, stat_flakes)[..., 1:] * (s[:, None] * sp[None, :])[..., None]
+        if not stat_flakes and getattr(brdf, "flakes", None) is not None:
+            # the glints of this light (drawn again alone, deterministic) carry the flake chain's state:
+            # a flake glints only when its normal is the binder half vector of (wi, wo)
+            from nmmm.appearance.render.plate.glints import _render_glints
+
+            glints = np.zeros((Hd, Wd, L), np.float32)
+            sig = np.radians(float(render_kwargs.get("glint_spread_deg", 1.0)))
+            _render_glints(plate, camera, [lt], [sp], w, sig, P[on], glints,
+                           render_kwargs.get("randomize_tiles", True), render_kwargs.get("tile_seed", 0),
+                           render_kwargs.get("area_splat", True))
+            pol += _flake_chain(brdf, w, wi, wo, xc)[..., 1:] * glints[on][..., None]
     # the smooth coat's mirror Dirac: sky / map / finite lamps seen in the coat
     if brdf.coat.roughness == 0:
         F = brdf.specular_reflectance(w, wo)
@@ -332,5 +354,5 @@ def render_plate_stokes(plate, camera, lights=(), environment=None, wavelength_n
     for k in range(3):
         stokes[k + 1][on] = pol[..., k].astype(np.float32)
     meta = {**img.metadata, "stokes": True, "stokes_frame": "x = image right, y = image up",
-            "glints_polarized": False}
+            "glints_polarized": plate.flakes is not None}
     return StokesImage(w, stokes, on, img.white_radiance, camera, meta)
