@@ -115,3 +115,29 @@ def test_per_pixel_render_equals_the_float64_brdf(paint):
            + paint.albedo(w, wo) * sky.spectral(w)[None, :])
     np.testing.assert_allclose(img.radiance[on], ref, rtol=2e-6, atol=1e-7 * ref.max())
     assert img.radiance.dtype == np.float32
+
+
+def test_smooth_coat_environment_integral_on_sparser_nodes():
+    """A smooth coat's environment integral (broad non-Dirac lobes) evaluated on nodes up to
+    ENVMAP_NODE_DEG apart and interpolated equals the integral at every coarse node to 1e-3."""
+    from nmmm.appearance.render import ViewingBooth, seed_metallic_plate
+    from nmmm.appearance.render.plate.environment import _envmap_smooth
+    from nmmm.appearance.render.plate.renderer import _envmap_sub
+
+    w = np.linspace(400.0, 700.0, 7)
+    cam = PinholeCamera((0.0, -180.0, 420.0), (0.0, 0.0, 0.0), fov_deg=8.0, resolution=(256, 171))
+    brdf = seed_metallic_plate(cells=(2, 2)).smooth_brdf
+    sub = _envmap_sub(brdf, cam, 4)
+    assert sub > 4 and _envmap_sub(opaque_paint(0.3, roughness=0.05), cam, 4) == 4
+    rows = np.unique(np.r_[np.arange(0, 171, 4), 170]).astype(float)
+    cols = np.unique(np.r_[np.arange(0, 256, 4), 255]).astype(float)
+    cd = cam.pixel_directions(rows, cols).reshape(-1, 3)
+    hit, _ = _plate_hits(cam, cd)
+    wo = -cd / np.linalg.norm(cd, axis=1, keepdims=True)
+    env = ViewingBooth(size_mm=(1000.0, 1000.0, 800.0)).environment(w, 64, 128)
+    args = (brdf, w, env, wo.reshape(rows.size, cols.size, 3), hit.reshape(rows.size, cols.size))
+    ref = _envmap_smooth(*args, sub=1)
+    got = _envmap_smooth(*args, sub=sub)
+    m = ref > 1e-3 * ref.max()
+    assert m.sum() > 0.5 * m.size
+    assert (np.abs(got - ref)[m] / ref[m]).max() < 1e-3
