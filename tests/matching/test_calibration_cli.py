@@ -23,7 +23,7 @@ def test_calibrate_both_modes_writes_the_comparison_and_a_runnable_calibrated_re
     for name in ("calibration.csv", "calibration.json", "report.md", "km_constants.csv", "hematite_calibrated.csv",
                  "calibrated_recipe.toml"):
         assert (out / name).is_file(), name
-    rows = {r["sample"]: r for r in csv.DictReader((out / "calibration.csv").open(encoding="utf-8"))}
+    rows = {r["sample"]: r for r in csv.DictReader((out / "calibration.csv").read_text(encoding="utf-8").splitlines())}
     left = rows["1:2"]
     assert left["role"] == "left out"
     assert float(left["dE00_physical"]) <= 1.0 < float(left["dE00_uncalibrated"])
@@ -35,7 +35,7 @@ def test_calibrate_both_modes_writes_the_comparison_and_a_runnable_calibrated_re
     for key, true in (("k_scale", 1.25), ("size_scale", 1.15)):
         assert abs(info["values"][key] - true) <= 3 * info["standard_errors"][key] + 2e-3
     assert np.allclose(np.diag(info["correlation"]), 1)
-    km = list(csv.DictReader((out / "km_constants.csv").open(encoding="utf-8")))
+    km = list(csv.DictReader((out / "km_constants.csv").read_text(encoding="utf-8").splitlines()))
     assert len(km) == 16 and {"K_hematite_per_um", "S_rutile_per_um", "k1", "k2"} <= set(km[0])
     # the calibrated recipe names the calibrated file and runs through the full model to the fitted masstone
     text = (out / "calibrated_recipe.toml").read_text(encoding="utf-8")

@@ -98,3 +98,12 @@ def test_a_ladder_the_fit_cannot_use_is_refused(ladder):
         calibrate_colourant([white, ladder[1]], "hematite", left_out=(ladder[1].name,))
     with pytest.raises(InvalidInputError, match="each once"):
         calibrate_colourant(ladder, "hematite", fit=("k_scale", "k_scale"))
+
+
+def test_a_ladder_that_fixes_the_values_poorly_says_so(ladder):
+    """A masstone alone cannot tell more absorption from bigger grains: the values come with a warning."""
+    from nmmm.matching.recipe_match import IdentifiabilityWarning
+
+    with pytest.warns(IdentifiabilityWarning, match="correlated"):
+        res = calibrate_colourant(ladder[:1], "hematite", fit=("k_scale", "k_legendre_1", "size_scale"))
+    assert any("k_scale and size_scale are correlated" in n for n in res.warnings), res.warnings

@@ -78,6 +78,7 @@ class CalibrationResult:
     covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of the fitted values, in fit order
     illuminant: str = "D65"
     uncalibrated: dict = field(default_factory=dict)  # sample -> spectrum with the uncorrected compound
+    warnings: list = field(default_factory=list)  # what the ladder fixes poorly (also issued as IdentifiabilityWarning)
 
     @property
     def correction(self) -> tuple[float, tuple]:
@@ -257,6 +258,7 @@ def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, lef
     except np.linalg.LinAlgError:
         cov = np.full((len(fit), len(fit)), np.inf)
         se = {f: float("inf") for f in fit}
+    notes = _identifiability(fit, r.x, se, cov)
     sk, sd, coef = params(r.x)
     before, after, pred, unc = {}, {}, {}, {}
     for p in prepared:
@@ -267,7 +269,37 @@ def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, lef
         after[p.name] = float(delta_e2000(lab_m, spectra_to_lab(p.w, pred[p.name], illuminant)))
     return CalibrationResult(compound, dict(zip(fit, (float(v) for v in r.x))), se, before, after, tuple(left_out), count[0],
                              time.perf_counter() - t0, prepared[0].w, prepared[0].nk(sk, coef), pred, window,
-                             prepared[0].material, cov, illuminant, unc)
+                             prepared[0].material, cov, illuminant, unc, notes)
+
+
+#: a fitted value is poorly fixed when its standard error exceeds this (relative for the scales, absolute
+#: for the Legendre coefficients of ln k), or two values are nearly degenerate past this correlation
+SE_WARNING, CORRELATION_WARNING = 0.1, 0.95
+
+
+def _identifiability(fit, x, se, cov) -> list[str]:
+    """Messages for values the ladder fixes poorly, each issued as an IdentifiabilityWarning."""
+    import warnings
+
+    from nmmm.matching.recipe_match import IdentifiabilityWarning
+
+    notes = []
+    for i, f in enumerate(fit):
+        rel = se[f] / abs(x[i]) if f in ("k_scale", "size_scale") else se[f]
+        if not np.isfinite(rel) or rel > SE_WARNING:
+            notes.append(f"{f} = {x[i]:.4g} ± {se[f]:.2g}: poorly fixed by this ladder (add samples: tints at other "
+                         "concentrations, a draw-down over black)")
+    d = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
+    with np.errstate(invalid="ignore"):
+        rho = cov / np.outer(d, d)
+    for i in range(len(fit)):
+        for j in range(i + 1, len(fit)):
+            if np.isfinite(rho[i, j]) and abs(rho[i, j]) > CORRELATION_WARNING:
+                notes.append(f"{fit[i]} and {fit[j]} are correlated {rho[i, j]:+.3f} on this ladder: it tells them apart "
+                             "poorly (tints with white and a film over black separate absorption from size)")
+    for n in notes:
+        warnings.warn(n, IdentifiabilityWarning, stacklevel=3)
+    return notes
 
 
 def write_calibrated_material(result: CalibrationResult, path, step_nm: float | None = None, source: str = "") -> "Path":  # noqa: F821

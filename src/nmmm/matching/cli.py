@@ -169,9 +169,14 @@ def calibrate(ladder, output, illuminant, mode="physical", fit_names=None):
     fit = tuple(f.strip() for f in fit_names.split(",") if f.strip()) if fit_names else tuple(spec.get("fit", DEFAULT_CALIBRATION_FIT))
     res = emp = None
     if mode in ("physical", "both"):
-        from nmmm.matching.calibration import calibrate_colourant
+        import warnings
 
-        res = calibrate_colourant(samples, compound, fit=fit, left_out=left, illuminant=illuminant)
+        from nmmm.matching.calibration import calibrate_colourant
+        from nmmm.matching.recipe_match import IdentifiabilityWarning
+
+        with warnings.catch_warnings():  # said on stdout and in report.md, not twice
+            warnings.simplefilter("ignore", IdentifiabilityWarning)
+            res = calibrate_colourant(samples, compound, fit=fit, left_out=left, illuminant=illuminant)
     if mode in ("empirical", "both"):
         from nmmm.matching.empirical_km import calibrate_empirical
 
@@ -188,6 +193,7 @@ def calibrate(ladder, output, illuminant, mode="physical", fit_names=None):
             write_calibrated_material(res, tmp / mat, step_nm=5.0, source=Path(ladder).name)
             (tmp / "calibrated_recipe.toml").write_text(_calibrated_recipe(samples, compound, mat, res.values), encoding="utf-8")
             info.update(values=res.values, standard_errors=res.standard_errors, fit=list(fit), material_file=mat,
+                        warnings=res.warnings,
                         de00_before=res.de00_before, de00_after=res.de00_after,
                         model_evaluations=res.evaluations, time_s=res.time_s,
                         correlation=_correlation(res.covariance).tolist())
@@ -200,6 +206,8 @@ def calibrate(ladder, output, illuminant, mode="physical", fit_names=None):
         (tmp / "report.md").write_text(_calibration_report(ladder, compound, rows, res, emp, fit, illuminant), encoding="utf-8")
     if res is not None:
         click.echo("  ".join(f"{k} = {v:.4f} ± {res.standard_errors[k]:.4f}" for k, v in res.values.items()))
+        for note in res.warnings:
+            click.echo(f"warning: {note}")
     for r in rows:
         click.echo(f"{r['sample']}{' (left out)' if r['role'] == 'left out' else ''}: dE00 "
                    + "; ".join(f"{k.split('_')[1]} {r[k]}" for k in r if k.startswith("dE00_")))
@@ -279,7 +287,7 @@ def _calibration_report(ladder, compound, rows, res, emp, fit, illuminant) -> st
                   f"of k. {res.evaluations} model evaluations, {res.time_s:.1f} s.", "",
                   "| parameter | value | standard error |", "|---|---|---|"]
         lines += [f"| {k} | {v:.5g} | {res.standard_errors[k]:.2g} |" for k, v in res.values.items()]
-        lines.append("")
+        lines += [""] + [f"**Warning:** {n}" for n in res.warnings] + ([""] if res.warnings else [])
     if emp is not None:
         lines += ["## Empirical mode", "",
                   f"Two-constant Kubelka-Munk K, S per unit volume fraction of {', '.join(emp.colourants)} (Duncan mixing), "
