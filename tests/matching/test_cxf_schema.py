@@ -95,3 +95,27 @@ def test_cxf_writer_refuses_a_grid_the_schema_cannot_hold(tmp_path):
         write_cxf(tmp_path / "a.cxf", MeasuredSpectra(np.arange(420.0, 701.0, 20.0), np.full((1, 15), 0.5), ("a",)))
     with pytest.raises(InvalidInputError, match="integers"):
         write_cxf(tmp_path / "b.cxf", MeasuredSpectra(np.arange(400.0, 700.0, 2.5), np.full((1, 120), 0.5), ("a",)))
+
+
+def test_nmmm_written_multi_angle_cxf_is_valid_cxf3_core(tmp_path):
+    """A multi-angle set (illumination 45°, aspecular -15° … 110°) written as one MultiAngle
+    ColorSpecification: strict colour-cxf parse, every required field present, the BRDFAngles' angles
+    and Notations as written, each spectrum's Name its angle; read back per geometry."""
+    w = np.arange(400.0, 701.0, 10.0)
+    aspec = [-15, 15, 25, 45, 75, 110]
+    sets = [MeasuredSpectra(w, np.stack([np.linspace(0.05, 0.6, w.size) / (k + 1), np.full(w.size, 0.8)]),
+                            ("silver", "white"), f"45as{a}") for k, a in enumerate(aspec)]
+    p = write_cxf(tmp_path / "ma.cxf", sets)
+    doc, problems = cxf3_core_problems(p.read_bytes())
+    assert problems == []
+    specs = doc.resources.color_specification_collection.color_specification
+    assert len(specs) == 1
+    angles = specs[0].measurement_spec.geometry_choice.choice.brdfangle
+    assert [(b.illumination_angle, b.aspecular, b.notation) for b in angles] == [(45.0, float(a), f"45as{a}") for a in aspec]
+    first = doc.resources.object_collection.object_value[0]
+    spectra = first.color_values.choice
+    assert [s.name for s in spectra] == [f"45as{a}" for a in aspec]
+    assert all(s.color_specification == specs[0].id for s in spectra)
+    for k, a in enumerate(aspec):
+        np.testing.assert_allclose(spectra[k].value, sets[k].reflectance[0], atol=5e-7)
+        np.testing.assert_allclose(read_cxf(p, geometry=f"45as{a}").reflectance, sets[k].reflectance, atol=5e-7)

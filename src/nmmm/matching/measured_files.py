@@ -3,13 +3,16 @@
 - :class:`MeasuredSpectra` — spectra (N samples × W wavelengths, reflectance factor in [0, 1]),
   sample names, the instrument geometry and the file's keywords.
 - :func:`read_cgats`, :func:`write_cgats` — CGATS.17 (ASTM E1708 / ISO 28178) text with
-  ``SPECTRAL_NM<λ>`` fields (``SPECTRAL_<λ>``, ``NM<λ>``, ``R<λ>`` also read), keyword
-  ``MEASUREMENT_GEOMETRY``.
+  ``SPECTRAL_NM<λ>`` fields (``SPECTRAL_<λ>``, ``NM<λ>``, ``R<λ>`` and Argyll's ``SPEC_<λ>`` also
+  read), keyword ``MEASUREMENT_GEOMETRY``. Argyll's ``.ti3`` (``CTI3``) is read as percent, its
+  format's unit, unless ``SPECTRAL_NORM`` says otherwise; ``SPECTRAL_BANDS`` /
+  ``SPECTRAL_START_NM`` / ``SPECTRAL_END_NM`` must agree with the fields.
 - :func:`read_cxf`, :func:`write_cxf`, :func:`cxf_geometries` — CxF3 (ISO 17972-1): each
   ``Object``'s ``ReflectanceSpectrum`` with its ``ColorSpecification`` (wavelength start and
   increment, geometry from CxF3-core's GeometryChoice: SphereGeometry ``di:8``/``de:8``, SingleAngle
-  ``45:0``/``45a:0``, MultiAngle, UnknownGeometry);
-  a multi-angle file holds one specification per angle, and one geometry is read at a time.
+  ``45:0``/``45a:0``, MultiAngle ``45as15`` …, UnknownGeometry); a multi-angle file holds one
+  specification per angle or one MultiAngle specification of several BRDFAngles (split into one
+  geometry per angle by each spectrum's Name), and one geometry is read at a time.
 - :func:`read_spectra_csv` — ``wavelength_nm,<sample>,<sample>…`` (a column per sample).
 - :func:`read_measured` — any of them by the file's suffix.
 
@@ -103,14 +106,16 @@ class MeasuredSpectra:
         return colour.MultiSpectralDistributions(self.reflectance.T, self.wavelength_nm, labels=list(self.names))
 
 
-def _scaled(values: np.ndarray, unit: str, where: str) -> np.ndarray:
+def _scaled(values: np.ndarray, unit: str, where: str, declared: bool = False) -> np.ndarray:
+    """Factors from ``values`` in ``unit``; ``declared``: the file itself states the unit (CGATS
+    SPECTRAL_NORM, Argyll's format), so percent data that are all dark are not a conflict."""
     if unit not in _UNITS:
         raise InvalidInputError(f"unit must be one of {_UNITS}, got {unit!r}")
     if not np.all(np.isfinite(values)):
         raise DataFileError(f"{where}: a spectral value is not a finite number")
     top = float(values.max()) if values.size else 0.0
     if unit == "percent":
-        if top <= PERCENT_THRESHOLD:
+        if top <= PERCENT_THRESHOLD and not declared:
             raise DataFileError(f"{where}: read as percent (unit='percent', CLI --percent), but no value exceeds "
                                 f"{PERCENT_THRESHOLD:g} (the largest is {top:g}): these are reflectance factors (0-1); "
                                 "dividing them by 100 would give an almost black sample — drop --percent")
@@ -123,7 +128,7 @@ def _scaled(values: np.ndarray, unit: str, where: str) -> np.ndarray:
     return values
 
 
-_SPECTRAL_FIELD = re.compile(r"^(?:SPECTRAL_NM_?|SPECTRAL_|NM_?|R_?)(\d+(?:\.\d+)?)$", re.IGNORECASE)
+_SPECTRAL_FIELD = re.compile(r"^(?:SPECTRAL_NM_?|SPECTRAL_|SPEC_|NM_?|R_?)(\d+(?:\.\d+)?)$", re.IGNORECASE)
 
 
 def _cgats_keyword(line: str, keywords: dict[str, str]) -> None:
@@ -199,15 +204,37 @@ def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
     if unit == "percent" and declared == "fraction":
         raise DataFileError(f"{p.name}: read as percent (unit='percent', CLI --percent), but the file says SPECTRAL_NORM "
                             f"{norm} (reflectance factors, 0-1); drop --percent, or fix the keyword if the data are percent")
-    if unit == "auto" and declared is not None:
+    first = next((ln for ln in lines if ln and not ln.startswith("#")), "")
+    argyll = first.split()[0].upper() in ("CTI3", "CTI1", "CTI2") if first else False
+    if argyll and declared is None and unit == "auto":
+        declared = "percent"  # Argyll writes its SPEC_<nm> fields in percent (0-100) by its format
+    from_file = unit == "auto" and declared is not None
+    if from_file:
         unit = declared
     order = np.argsort([w for _, w in spec])
     w = np.array([spec[i][1] for i in order])
-    R = _scaled(np.array(vals, float)[:, order] if vals else np.zeros((0, w.size)), unit, p.name)
+    _check_spectral_bands(p.name, keywords, w)
+    R = _scaled(np.array(vals, float)[:, order] if vals else np.zeros((0, w.size)), unit, p.name, declared=from_file)
     if R.shape[0] == 0:
         raise DataFileError(f"{p.name}: the data block holds no samples")
     geo = keywords.get("MEASUREMENT_GEOMETRY") or keywords.get("GEOMETRY")
     return MeasuredSpectra(w, R, tuple(names), geo, keywords)
+
+
+def _check_spectral_bands(name: str, keywords: dict, w: np.ndarray) -> None:
+    """Argyll's (and CGATS's common) ``SPECTRAL_BANDS`` / ``SPECTRAL_START_NM`` / ``SPECTRAL_END_NM``
+    keywords, where given, must describe the spectral fields found (else fields were lost)."""
+    said = []
+    for key, got in (("SPECTRAL_BANDS", float(w.size)), ("SPECTRAL_START_NM", float(w[0])), ("SPECTRAL_END_NM", float(w[-1]))):
+        v = keywords.get(key)
+        try:
+            if v is not None and abs(float(v) - got) > 1e-6:
+                said.append(f"{key} {v} but the fields give {got:g}")
+        except ValueError:
+            raise DataFileError(f"{name}: {key} {v!r} is not a number") from None
+    if said:
+        raise DataFileError(f"{name}: the header and the spectral fields disagree ({'; '.join(said)}); fields missing or "
+                            "the header stale — re-export the file")
 
 
 def _fmt(x: float) -> str:
@@ -260,7 +287,8 @@ def _geometry_of_spec(spec, where: str = "CxF3") -> str | None:
     EmissiveMode | SphereGeometry (``Specular_Included`` -> ``"di:8"``, ``Specular_Excluded`` ->
     ``"de:8"``) | SingleAngle (``"45:0"``; ``"45a:0"`` / ``"0:45a"`` when its
     SingleAngleConfiguration is Annular) | UnknownGeometry (its text) | MultiAngle (each BRDFAngle's
-    Notation, or ``"45as15"``). A non-standard ``<Geometry>`` text (older nmmm files) is read too."""
+    Notation attribute, or ``"45as15"`` from its angles; a list when there are several, each spectrum's
+    Name then picks its angle). A non-standard ``<Geometry>`` text (older nmmm files) is read too."""
     gc = _find(spec, "GeometryChoice")
     if gc is not None:
         kids = list(gc)
@@ -281,18 +309,15 @@ def _geometry_of_spec(spec, where: str = "CxF3") -> str | None:
             a_meas = "a" if annular and ill == 0 and meas != 0 else ""
             return f"{ill:g}{a_ill}:{meas:g}{a_meas}"
         if kind == "MultiAngle":
-            angles = [c for c in el if _local(c.tag) == "BRDFAngle"]
             names = []
-            for b in angles:
-                note = _find(b, "Notation")
-                if note is not None and (note.text or "").strip():
-                    names.append(note.text.strip())
-                else:
-                    names.append(f"{_angle(b, 'IlluminationAngle', where):g}as{_angle(b, 'Aspecular', where):g}")
-            if len(names) != 1:
-                raise DataFileError(f"{where}: a MultiAngle specification with {len(names)} BRDFAngles {names}; nmmm reads "
-                                    "one ColorSpecification per angle (as X-Rite's multi-angle exports write them)")
-            return names[0]
+            for b in (c for c in el if _local(c.tag) == "BRDFAngle"):
+                note = b.get("Notation") or (getattr(_find(b, "Notation"), "text", None) or "").strip()  # XSD: attribute
+                names.append(note or f"{_angle(b, 'IlluminationAngle', where):g}as{_angle(b, 'Aspecular', where):g}")
+            if not names:
+                raise DataFileError(f"{where}: a MultiAngle specification without a BRDFAngle (CxF3-core needs one or more)")
+            if len(set(names)) != len(names):
+                raise DataFileError(f"{where}: a MultiAngle specification names an angle twice: {names}")
+            return names[0] if len(names) == 1 else list(names)  # several: each spectrum's Name picks its angle
         if kind == "UnknownGeometry":
             text = (el.text or "").strip()
             return None if text.lower() in ("", "unknown") else text
@@ -349,11 +374,29 @@ def _cxf_samples(p: Path):
                 v = np.array([float(x) for x in (rs.text or "").split()])
             except ValueError:
                 raise DataFileError(f"{p.name}: object {obj.get('Name')!r}: a spectral value is not a number") from None
-            out.append((obj.get("Name") or obj.get("Id") or f"object {len(out) + 1}", sp.get("geometry"),
+            geometry = sp.get("geometry")
+            if isinstance(geometry, list):  # a MultiAngle specification of several BRDFAngles
+                geometry = _multi_angle_of(rs, geometry, f"{p.name}: object {obj.get('Name')!r}")
+            out.append((obj.get("Name") or obj.get("Id") or f"object {len(out) + 1}", geometry,
                         float(start) + float(inc) * np.arange(v.size), v))
     if not out:
         raise DataFileError(f"{p.name}: no ReflectanceSpectrum in any Object; only spectra can be matched")
     return out
+
+
+def _multi_angle_of(rs, notations: list, where: str) -> str:
+    """The BRDFAngle of one ReflectanceSpectrum in a MultiAngle ColorSpecification: its ``Name``
+    attribute is the angle's Notation (compared after :func:`canonical_geometry`)."""
+    name = (rs.get("Name") or "").strip()
+    if not name:
+        raise DataFileError(f"{where}: a ReflectanceSpectrum of the MultiAngle ColorSpecification "
+                            f"{rs.get('ColorSpecification')!r} ({len(notations)} BRDFAngles {notations}) has no Name; "
+                            "nmmm does not guess which angle it is — set Name to the Notation of its BRDFAngle")
+    hit = [n for n in notations if canonical_geometry(n) == canonical_geometry(name)]
+    if not hit:
+        raise DataFileError(f"{where}: ReflectanceSpectrum Name {name!r} is none of the BRDFAngle Notations {notations} "
+                            f"of its ColorSpecification {rs.get('ColorSpecification')!r}")
+    return hit[0]
 
 
 def cxf_geometries(path) -> list:
@@ -396,6 +439,8 @@ def read_cxf(path, geometry: str | None = None, unit: str = "auto") -> MeasuredS
 
 
 _ANGLES = re.compile(r"(-?\d+(?:\.\d+)?)([ac]?):(-?\d+(?:\.\d+)?)([ac]?)")
+#: a multi-angle (goniospectrophotometer) geometry: illumination angle, "as", aspecular angle (ASTM E2175)
+_ASPECULAR = re.compile(r"(-?\d+(?:\.\d+)?)as(-?\d+(?:\.\d+)?)")
 
 
 def canonical_geometry(geometry: str | None) -> str | None:
@@ -416,6 +461,9 @@ def canonical_geometry(geometry: str | None) -> str | None:
     m = _ANGLES.fullmatch(t)
     if m:
         return f"{float(m.group(1)):g}{'a' if m.group(2) else ''}:{float(m.group(3)):g}{'a' if m.group(4) else ''}"
+    m = _ASPECULAR.fullmatch(t)
+    if m:
+        return f"{float(m.group(1)):g}as{float(m.group(2)):g}"
     return g or None
 
 
@@ -477,6 +525,21 @@ def _geometry_xml(spec_el, geometry: str | None):
     return ms
 
 
+def _multi_angle_xml(spec_el, notations: list):
+    """MeasurementSpec with CxF3-core's MultiAngle: one BRDFAngle per ``"<illumination>as<aspecular>"``
+    geometry (IlluminationAngle, Aspecular elements; Notation attribute), the spectra naming theirs."""
+    ms = ET.SubElement(spec_el, f"{{{CXF_NS}}}MeasurementSpec")
+    ET.SubElement(ms, f"{{{CXF_NS}}}MeasurementType").text = "Spectrum_Reflectance"
+    gc = ET.SubElement(ms, f"{{{CXF_NS}}}GeometryChoice")
+    ma = ET.SubElement(gc, f"{{{CXF_NS}}}MultiAngle")
+    for note in notations:
+        ill, asp = _ASPECULAR.fullmatch(note).groups()
+        b = ET.SubElement(ma, f"{{{CXF_NS}}}BRDFAngle", Notation=note)
+        ET.SubElement(b, f"{{{CXF_NS}}}IlluminationAngle").text = ill
+        ET.SubElement(b, f"{{{CXF_NS}}}Aspecular").text = asp
+    return ms
+
+
 #: CxF3-core's WavelengthRange: StartWL an integer nm in [360, 400], Increment an integer nm
 CXF_START_WL_NM = (360, 400)
 
@@ -501,7 +564,9 @@ def write_cxf(path, spectra, creator: str = "nmmm", creation_date: str | None = 
     """CxF3 XML of one :class:`MeasuredSpectra` or several (one per geometry: a multi-angle set
     whose objects share names), atomically, valid against CxF3-core: geometry ``di:8``/``de:8`` as
     SphereGeometry Specular_Included/Excluded, ``45:0``/``45a:0``/``0:45a`` as SingleAngle with its
-    SingleAngleConfiguration (Uniplanar/Annular), others as UnknownGeometry; the grid uniform, in
+    SingleAngleConfiguration (Uniplanar/Annular), multi-angle ``"45as15"`` sets (illumination,
+    aspecular angle) on one grid as one MultiAngle ColorSpecification with a BRDFAngle each (each
+    ReflectanceSpectrum's Name = its angle's Notation), others as UnknownGeometry; the grid uniform, in
     whole nm, starting at 360–400 nm (the schema's StartWL). ``creation_date`` (ISO 8601, default
     now, UTC) goes on the file and each object."""
     from datetime import datetime, timezone
@@ -520,20 +585,32 @@ def write_cxf(path, spectra, creator: str = "nmmm", creation_date: str | None = 
     coll = ET.SubElement(res, f"{{{CXF_NS}}}ObjectCollection")
     objects = {}
     cs_coll = ET.SubElement(res, f"{{{CXF_NS}}}ColorSpecificationCollection")
+    groups = {}  # ColorSpecification -> the sets it holds: one per set, or one MultiAngle per grid
     for k, s in enumerate(sets):
-        start, inc = _cxf_grid(s.wavelength_nm)
+        grid = _cxf_grid(s.wavelength_nm)
+        multi = _ASPECULAR.fullmatch(canonical_geometry(s.geometry) or "")
+        groups.setdefault(("multi", grid) if multi else ("one", k), (grid, []))[1].append(s)
+    for k, ((kind, _), ((start, inc), members)) in enumerate(groups.items()):
         sid = f"CS{k + 1}"
         cs = ET.SubElement(cs_coll, f"{{{CXF_NS}}}ColorSpecification", Id=sid)
-        ms = _geometry_xml(cs, s.geometry)
+        if kind == "multi":
+            notes = [canonical_geometry(m.geometry) for m in members]
+            if len(set(notes)) != len(notes):
+                raise InvalidInputError(f"CxF3 multi-angle sets name an angle twice: {notes}")
+            ms = _multi_angle_xml(cs, notes)
+        else:
+            ms, notes = _geometry_xml(cs, members[0].geometry), [None]
         ET.SubElement(ms, f"{{{CXF_NS}}}WavelengthRange", StartWL=str(start), Increment=str(inc))
-        for name, r in zip(s.names, s.reflectance):
-            if name not in objects:
-                obj = ET.SubElement(coll, f"{{{CXF_NS}}}Object", ObjectType="Standard", Name=name, Id=str(len(objects) + 1))
-                ET.SubElement(obj, f"{{{CXF_NS}}}CreationDate").text = created
-                objects[name] = ET.SubElement(obj, f"{{{CXF_NS}}}ColorValues")
-            rs = ET.SubElement(objects[name], f"{{{CXF_NS}}}ReflectanceSpectrum", ColorSpecification=sid,
-                               StartWL=str(start))
-            rs.text = " ".join(_fmt(v) for v in r)
+        for s, note in zip(members, notes):
+            for name, r in zip(s.names, s.reflectance):
+                if name not in objects:
+                    obj = ET.SubElement(coll, f"{{{CXF_NS}}}Object", ObjectType="Standard", Name=name,
+                                        Id=str(len(objects) + 1))
+                    ET.SubElement(obj, f"{{{CXF_NS}}}CreationDate").text = created
+                    objects[name] = ET.SubElement(obj, f"{{{CXF_NS}}}ColorValues")
+                attrs = dict(ColorSpecification=sid, StartWL=str(start)) | ({"Name": note} if note else {})
+                rs = ET.SubElement(objects[name], f"{{{CXF_NS}}}ReflectanceSpectrum", **attrs)
+                rs.text = " ".join(_fmt(v) for v in r)
     ET.indent(root)
     atomic_write_bytes(path, ET.tostring(root, encoding="utf-8", xml_declaration=True))
     return Path(path)
