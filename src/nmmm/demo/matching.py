@@ -208,7 +208,7 @@ def calibration_demo(output_dir) -> dict:
         wr.writerows(rows)
     params = [{"parameter": k, "injected": PERTURBATION[k], "calibrated": round(v, 4),
                "standard error": round(phys.standard_errors[k], 4)} for k, v in phys.values.items()]
-    text = [f"A ladder of hematite/rutile tints (60 µm over white, de:8) is 'measured' with a hematite whose k is "
+    text = [f"A ladder of hematite/rutile films (60 µm, de:8: masstone, a 1:4 tint over white and over black, the white over white and over black) is 'measured' with a hematite whose k is "
             f"{PERTURBATION['k_scale']:g} times the database's and tilted towards the red (ln k + "
             f"{PERTURBATION['k_legendre_1']:g}·P1), its n changed by the Kramers–Kronig transform of that change, grains "
             f"{(PERTURBATION['size_scale'] - 1) * 100:.0f} % larger, plus noise {NOISE} in reflectance. The physical "

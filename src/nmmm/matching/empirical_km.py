@@ -57,7 +57,7 @@ __all__ = ["EmpiricalCalibration", "duncan_mixing", "empirical_reflectance", "fi
 _LN_BOUNDS = (-16.0, 8.0)  # ln of K, S per µm per unit fraction
 
 
-def duncan_mixing(concentrations, K, S):
+def duncan_mixing(concentrations, K, S) -> tuple[np.ndarray, np.ndarray]:
     """(K_mix, S_mix) = (Σ c_i K_i, Σ c_i S_i): ``concentrations`` (..., m), ``K``, ``S`` (m, n_λ).
 
     Examples
@@ -70,7 +70,7 @@ def duncan_mixing(concentrations, K, S):
     return c @ np.asarray(K, float), c @ np.asarray(S, float)
 
 
-def empirical_reflectance(K_mix, S_mix, thickness_um, substrate_reflectance, k1, k2, specular: str = "excluded"):
+def empirical_reflectance(K_mix, S_mix, thickness_um, substrate_reflectance, k1, k2, specular: str = "excluded") -> np.ndarray:
     """Measured reflectance of a KM film of ``K_mix``, ``S_mix`` (per µm) and ``thickness_um`` over
     a substrate, with Saunderson's correction (module docstring); everything broadcasts."""
     from nmmm.layers.kubelka_munk import km_reflectance, saunderson
@@ -105,7 +105,8 @@ def _start(c, q, X, Rg, R, k1, k2, specular):
     return np.clip(best[1], *_LN_BOUNDS)
 
 
-def fit_km_constants(concentrations, thickness_um, substrate_reflectance, reflectance, k1, k2, specular: str = "excluded"):
+def fit_km_constants(concentrations, thickness_um, substrate_reflectance, reflectance, k1, k2,
+                     specular: str = "excluded") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """K and S (each (m, n_λ), per µm per unit fraction) of m colourants from n films.
 
     ``concentrations`` (n, m) volume fractions; ``thickness_um`` (n,); ``substrate_reflectance``
