@@ -76,9 +76,11 @@ def _palette(model):
 
 def select_colourants(model, max_colourants: int, target_reflectance=None, target_lab=None, mode: str = "colorimetric",
                       illuminant: str = "D65", test_illuminants=("A", "F11"), observer: str = "2", n_finish: int = 3,
-                      metamerism_weight: float = 0.0, progress: bool = False) -> list:
+                      metamerism_weight: float = 0.0, tolerance_de00: float = 1.0, progress: bool = False) -> list:
     """The subsets of at most ``max_colourants`` of ``model``'s palette (its varied fraction keys),
-    ranked (module docstring); a list of :class:`SubsetMatch`, best first."""
+    ranked (module docstring); a list of :class:`SubsetMatch`, best first. When even the best subset
+    ends above ``tolerance_de00``, a warning says the palette cannot reach the target: how far the
+    best is and which direction (ΔL*, ΔC*, hue in words) is missing."""
     import warnings
 
     from scipy.optimize import least_squares
@@ -151,6 +153,15 @@ def select_colourants(model, max_colourants: int, target_reflectance=None, targe
     out.sort(key=lambda s: (s.stage != "ad", s.de00))
     if out and out[0].result is not None:
         out[0].result.time_s = time.perf_counter() - t0
+    if out and out[0].de00 > tolerance_de00:
+        from nmmm.matching.recipe_match import _missing_words
+
+        best = out[0]
+        lab_best = best.result.lab if best.result is not None else None
+        warnings.warn(f"the palette cannot reach the target: the best subset of at most {max_colourants} "
+                      f"({' + '.join(best.colourants)}) is ΔE00 = {best.de00:.2f} (> {tolerance_de00:g}) — "
+                      f"{_missing_words(best.dlch, lab_t if lab_best is not None else None, lab_best)} (add a colourant that supplies the missing "
+                      "direction, allow more colourants, or widen the bounds)", UserWarning, stacklevel=2)
     return out
 
 
