@@ -30,7 +30,10 @@ The glinting flakes of a footprint are then a Poisson thinning of its flakes
       Var L / ⟨L⟩² = (⟨w²⟩ / ⟨w⟩²) / N,   N = n_A A p_ω Ω_g,   Ω_g = 1 / ∫ g² dω
 
   N is the number of glinting flakes per pixel (the flakes whose mirror direction falls in
-  the lobe's effective solid angle Ω_g ≈ 4π σ_g²). Closer viewing (smaller A) gives fewer,
+  the lobe's effective solid angle Ω_g ≈ 4π σ_g²). For a lobe wide enough that p_ω changes
+  across it, the moments are integrated over the lobe (polar Gauss quadrature around ωo):
+  N = n_A A (∫p_ω g)² / ∫p_ω g², the fourth cumulant n_A A ⟨w⁴⟩ ∫p_ω g⁴, and the glints'
+  mean is the statistical BRDF times ``lobe_mean_factor`` = ∫p_ω g / p_ω(ωo). Closer viewing (smaller A) gives fewer,
   individually visible glints (large Var/⟨L⟩²); farther away they merge (N ≫ 1).
 
 :func:`glint_footprint_statistics` evaluates these per pixel. :func:`simulate_glint_pixels`
@@ -87,6 +90,8 @@ class GlintFootprintStatistics:
     lobe_sigma_rad: float
     weights: np.ndarray
     relative_fourth_cumulant: np.ndarray
+    #: ⟨L_glints⟩ / (statistical flake BRDF term): ∫ p_ω g dω / p_ω(ωo) (→ 1 for a narrow lobe)
+    lobe_mean_factor: np.ndarray | float = 1.0
 
     def variance_error(self, n_pixels) -> np.ndarray:
         """Predicted standard error of the relative variance estimated from ``n_pixels``
@@ -115,6 +120,50 @@ def lobe_integrals(sigma_rad: float, cut: float = LOBE_CUT) -> tuple[float, floa
     g2 = gnorm ** 2 * math.pi * sigma_rad ** 2 * (1 - math.exp(-cut * cut))
     g4 = gnorm ** 4 * 0.5 * math.pi * sigma_rad ** 2 * (1 - math.exp(-2 * cut * cut))
     return 1.0, g2, g4
+
+
+def _mirror_density(tilt, n, ip, wo):
+    """p_ω(ωo) per external sr (module docstring), ip the refracted light direction."""
+    op = _refract_in(wo, n)
+    h = ip + op
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    ih = np.clip(np.sum(ip * h, axis=-1), 1e-9, 1.0)
+    return tilt.pdf(h[..., 2]) * np.clip(wo[..., 2], 0.0, None) / (4 * n * n * ih * np.maximum(op[..., 2], 1e-9))
+
+
+def _lobe_moments(tilt, n, ip, wo, sigma, n_r: int = 6, n_phi: int = 8, chunk: int = 32768):
+    """(∫_disc p_ω dω, ∫ p_ω g dω, ∫ p_ω g² dω, ∫ p_ω g⁴ dω) around each ωo over the cut
+    lobe (radius 3σ): Gauss–Legendre in the angle r (weight sin r), uniform in azimuth."""
+    shape = wo.shape[:-1]
+    wo2 = wo.reshape(-1, 3)
+    ip2 = np.broadcast_to(ip, wo.shape).reshape(-1, 3)
+    x, wx = np.polynomial.legendre.leggauss(n_r)
+    rmax = LOBE_CUT * sigma
+    r = 0.5 * (x + 1) * rmax
+    wr = 0.5 * rmax * wx * np.sin(r)
+    ph = (np.arange(n_phi) + 0.5) * 2 * math.pi / n_phi
+    gnorm = 1.0 / (2 * math.pi * sigma ** 2 * (1 - math.exp(-0.5 * LOBE_CUT ** 2)))
+    g = gnorm * np.exp(-0.5 * (r / sigma) ** 2)
+    W = (wr[:, None] * np.full(n_phi, 2 * math.pi / n_phi)[None, :]).ravel()  # (K,)
+    G = np.repeat(g, n_phi)
+    cr, sr = np.repeat(np.cos(r), n_phi), np.repeat(np.sin(r), n_phi)
+    cp, sp = np.tile(np.cos(ph), n_r), np.tile(np.sin(ph), n_r)
+    out = np.zeros((4, wo2.shape[0]))
+    for i in range(0, wo2.shape[0], chunk):
+        o = wo2[i:i + chunk]
+        t1 = np.cross(o, np.array([0.0, 0.0, 1.0]))
+        bad = np.linalg.norm(t1, axis=1) < 1e-9
+        t1[bad] = (1.0, 0.0, 0.0)
+        t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+        t2 = np.cross(o, t1)
+        d = (cr[None, :, None] * o[:, None, :] + sr[None, :, None]
+             * (cp[None, :, None] * t1[:, None, :] + sp[None, :, None] * t2[:, None, :]))  # (c, K, 3)
+        p = _mirror_density(tilt, n, ip2[i:i + chunk, None, :], d)  # (c, K)
+        out[0, i:i + chunk] = p @ W
+        out[1, i:i + chunk] = p @ (W * G)
+        out[2, i:i + chunk] = p @ (W * G * G)
+        out[3, i:i + chunk] = p @ (W * G ** 4)
+    return tuple(v.reshape(shape) for v in out)
 
 
 def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_spread_deg: float = 1.0,
@@ -150,17 +199,17 @@ def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_sprea
     tilt = paint.flakes.tilt
     ip = _refract_in(wi, n)
     op = _refract_in(wo, n)
-    h = ip + op
-    h /= np.linalg.norm(h, axis=-1, keepdims=True)
-    ih = np.clip(np.sum(ip * h, axis=-1), 1e-9, 1.0)
-    p_m = tilt.pdf(h[..., 2])
-    p_w = p_m * wo[..., 2] / (4 * n * n * ih * np.maximum(op[..., 2], 1e-9))
+    p_w = _mirror_density(tilt, n, ip, wo)
     cw, chh = flakes.region_nm
     n_a = len(flakes) / (cw * chh * 1e-12)
     s = math.radians(sig)
-    _, g2, g4 = lobe_integrals(s)
-    N = n_a * A * p_w / g2
-    lam = n_a * A * p_w * math.pi * (LOBE_CUT * s) ** 2
+    # the lobe moments of the mirror density, ∫ p_ω(ω) g^j(∠(ω, ωo)) dω (j = 0 over the cut
+    # disc, 1, 2, 4), by a polar Gauss quadrature around ωo: exact for a density that varies
+    # across a wide lobe, → p_ω(ωo) ∫ g^j as σ_g → 0
+    I0, I1, I2, I4 = _lobe_moments(tilt, n, ip, wo, s)
+    N = np.where(I2 > 0, n_a * A * I1 * I1 / np.where(I2 > 0, I2, 1.0), 0.0)
+    lam = n_a * A * I0
+    lobe_factor = np.where(p_w > 0, I1 / np.where(p_w > 0, p_w, 1.0), 1.0)
     # weights a_k exp(-τ_e S ζ_k) at each pixel's path factor S
     a = np.asarray(flakes.areas_nm2, float) * 1e-12
     zeta = _depth_fraction(flakes)
@@ -176,12 +225,11 @@ def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_sprea
     m4 = np.array([np.mean((a * np.exp(-v * zeta)) ** 4) for v in xs])
     ratio = np.interp(x, xs, m2 / m1 ** 2)
     ratio4 = np.interp(x, xs, m4 / m1 ** 4)
-    dens = n_a * A * p_w  # flakes per pixel per sr of mirror directions
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.where(N > 0, ratio / N, np.inf)
-        k4 = np.where(dens > 0, ratio4 * g4 / dens ** 3, np.inf)
+        k4 = np.where(I1 > 0, ratio4 * I4 / ((n_a * A) ** 3 * I1 ** 4), np.inf)
     weights = a * np.exp(-float(np.mean(x)) * zeta)
-    return GlintFootprintStatistics(N, lam, rel, ratio, p_w, float(n_a), A, s, weights, k4)
+    return GlintFootprintStatistics(N, lam, rel, ratio, p_w, float(n_a), A, s, weights, k4, lobe_factor)
 
 
 def simulate_glint_pixels(mean, stats: GlintFootprintStatistics, rng=None) -> np.ndarray:

@@ -101,13 +101,15 @@ def _variance_check(plate, cam, light, spread=1.0, bands=4):
     y = P[..., 1]
     edges = np.linspace(y[on].min(), y[on].max(), bands + 1)
     rows = []
+    f2 = np.asarray(st.lobe_mean_factor) ** 2  # z is relative to the BRDF, the variance to the glints' mean
     for a, b in zip(edges[:-1], edges[1:]):
         m = on & (y >= a) & (y <= b)
         s2, _ = variance_standard_error(z[m])
         rows.append({"glinting_flakes_per_pixel": round(float(st.glinting_flakes[m].mean()), 3),
-                     "measured": round(s2, 3), "predicted": round(float(st.relative_variance[m].mean()), 3),
-                     "standard_error": round(float(st.variance_error(int(m.sum()))[m].mean()), 3),
-                     "mean_over_brdf": round(float(z[m].mean()), 3)})
+                     "measured": round(s2, 3), "predicted": round(float((st.relative_variance * f2)[m].mean()), 3),
+                     "standard_error": round(float((st.variance_error(int(m.sum())) * f2)[m].mean()), 3),
+                     "mean_over_brdf": round(float(z[m].mean()), 3),
+                     "predicted_mean_over_brdf": round(float(np.asarray(st.lobe_mean_factor)[m].mean()), 3)})
     return rows
 
 
