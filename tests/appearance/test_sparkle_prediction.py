@@ -98,3 +98,33 @@ def test_sparkle_falls_with_the_illumination_angle(setup):
         pred.append(np.mean([s.density_per_mm2 for s in sims]))
     assert np.all(np.diff(meas) < 0) and np.all(np.diff(pred) < 0), (meas, pred)
     assert meas[0] / meas[-1] > 2 and pred[0] / pred[-1] > 2
+
+
+def test_sparkle_from_composition_without_rendering(setup):
+    """The no-render prediction (paint + flake cell + angles) agrees with the metric on the
+    rendered images at 15° and 75°, within 3 combined sampling errors."""
+    from nmmm.appearance.sparkle_prediction import sparkle_from_composition
+
+    plate, cam = setup
+    pred = sparkle_from_composition(plate.smooth_brdf, plate.flakes, (15.0, 75.0), pixel_size_um=PIXEL_UM,
+                                    size_px=N_PIX, n_images=6)
+    for a in (15.0, 75.0):
+        m, _, _, _ = _measure_and_predict(plate, cam, a, n_sim=1)
+        p = pred[a]
+        se = np.hypot(np.sqrt(m.n_sparkles) / m.image_area_mm2, p["density_per_mm2_sd"])
+        assert abs(m.density_per_mm2 - p["density_per_mm2"]) < 3 * se, (a, m.density_per_mm2, p)
+        assert abs(m.graininess - p["graininess"]) < 3 * p["graininess_sd"], (a, m.graininess, p)
+    assert pred[15.0]["density_per_mm2"] > 2 * pred[75.0]["density_per_mm2"]
+
+
+def test_sparkle_from_composition_bad_input(setup):
+    from nmmm.appearance.sparkle_prediction import sparkle_from_composition
+    from nmmm.errors import InvalidInputError
+
+    plate, _ = setup
+    with pytest.raises(InvalidInputError, match="illumination_deg"):
+        sparkle_from_composition(plate.smooth_brdf, plate.flakes, (95.0,))
+    with pytest.raises(InvalidInputError, match="pixel_size_um"):
+        sparkle_from_composition(plate.smooth_brdf, plate.flakes, (45.0,), pixel_size_um=0.0)
+    with pytest.raises(InvalidInputError, match="glint_spread_deg"):
+        sparkle_from_composition(plate.smooth_brdf, plate.flakes, (45.0,), glint_spread_deg=-1.0)

@@ -63,7 +63,8 @@ from nmmm.errors import InvalidInputError
 from nmmm.spectra import check_finite
 
 __all__ = ["GlintFootprintStatistics", "glint_footprint_statistics", "lobe_integrals", "simulate_glint_pixels",
-           "predicted_graininess", "predicted_sparkle", "variance_standard_error", "pixel_footprint_mm2"]
+           "predicted_graininess", "predicted_sparkle", "variance_standard_error", "pixel_footprint_mm2",
+           "sparkle_from_composition"]
 
 #: the renderer's lobe cut (in units of σ_g)
 LOBE_CUT = 3.0
@@ -324,3 +325,52 @@ def pixel_footprint_mm2(camera) -> tuple[np.ndarray, np.ndarray]:
     a = Pc[1:, 1:] - Pc[:-1, :-1]
     b = Pc[:-1, 1:] - Pc[1:, :-1]
     return 0.5 * np.abs(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]), P
+
+
+def sparkle_from_composition(paint, flakes, illumination_deg=(15.0, 45.0, 75.0), pixel_size_um: float = 40.0,
+                             size_px: int = 160, glint_spread_deg: float = 1.0, wavelength_nm: float = 550.0,
+                             n_images: int = 8, rng=0, **kwargs) -> dict:
+    """Sparkle and graininess predicted from the composition for a camera along the normal
+    and a directional light at each ``illumination_deg`` (multi-angle sparkle instruments
+    light at 15°, 45°, 75° and image at 0°), without rendering.
+
+    The image is ``size_px`` square pixels of ``pixel_size_um``: its mean is the paint's BRDF
+    (smooth part + the statistical flake term through the lobe), its glints the compound-Poisson
+    law of :func:`glint_footprint_statistics`; the metric is
+    :func:`~nmmm.appearance.sparkle.sparkle_graininess` (``kwargs`` go there) averaged over
+    ``n_images`` statistical images. Returns ``{angle: {metric: mean, metric + "_sd": spread}}``
+    with the glinting flakes per pixel and the analytic graininess ``graininess_analytic``.
+    """
+    ps = float(check_finite(pixel_size_um, "pixel_size_um"))
+    if not ps > 0:
+        raise InvalidInputError(f"pixel_size_um must be > 0, got {pixel_size_um!r}")
+    m = int(size_px)
+    if m < 8:
+        raise InvalidInputError(f"size_px must be >= 8 pixels, got {size_px!r}")
+    rng = np.random.default_rng(rng)
+    w = np.array([float(wavelength_nm)])
+    A = np.full((m, m), (ps * 1e-3) ** 2)
+    wo = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (m, m, 3))
+    out = {}
+    for ang in np.atleast_1d(np.asarray(illumination_deg, float)):
+        if not 0 <= ang < 90:
+            raise InvalidInputError(f"illumination_deg must lie in [0, 90), got {ang!r}")
+        t = math.radians(ang)
+        wi = np.array([0.0, math.sin(t), math.cos(t)])
+        smooth = float(paint.evaluate(w, wi, wo[0, 0], components=("specular", "base", "multiple"))[0]) * wi[2]
+        stat = float(paint.evaluate(w, wi, wo[0, 0], components=("flakes",))[0]) * wi[2]
+        st = glint_footprint_statistics(paint, flakes, np.broadcast_to(wi, (m, m, 3)), wo, A, glint_spread_deg,
+                                        wavelength_nm)
+        gmean = np.full((m, m), stat) * np.asarray(st.lobe_mean_factor)
+        sm = np.full((m, m), smooth)
+        mets = [predicted_sparkle(sm, gmean, st, ps, rng=rng, **kwargs).as_dict() for _ in range(int(n_images))]
+        row = {}
+        for k in ("density_per_mm2", "area_fraction", "mean_contrast", "p90_contrast", "sparkle_intensity",
+                  "graininess"):
+            v = np.array([d[k] for d in mets], float)
+            row[k] = float(v.mean())
+            row[k + "_sd"] = float(v.std(ddof=1)) if v.size > 1 else 0.0
+        row["glinting_flakes_per_pixel"] = float(np.mean(st.glinting_flakes))
+        row["graininess_analytic"] = predicted_graininess(sm, gmean, st, ps)
+        out[float(ang)] = row
+    return out
