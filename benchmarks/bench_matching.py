@@ -1,8 +1,9 @@
-"""A 3-colourant match: nmmm.matching.match_recipe against plain scipy least-squares (issue 17, Speed).
+"""A 3- or 4-colourant match: nmmm.matching.match_recipe against plain scipy least-squares (issue 17, Speed).
 
 The case: the shipped hematite tint at 8 µm over white with a third colourant (a black, n 1.9 + 0.6i,
 60 nm), three free fractions (hematite 0.005–0.08, rutile 0.02–0.25, black 0–0.02); the target is the
 adding–doubling spectrum at (0.021, 0.15, 0.006) — the recipe of tests/matching/test_match.py.
+``--colourants 4`` adds gold nanospheres (40 nm, 0–0.002, true 0.0008; tests/matching/test_match_acceptance.py).
 
 What is timed, per mode (colorimetric: ΔE00 residual + 0.1 × spectral residual under D65; spectral):
 
@@ -24,7 +25,8 @@ evaluations are counted by solver (``ad``: adding–doubling, ~8 ms each here; `
 numpy is imported), alternately, after one warm-up run each; medians of ``--repeat`` runs.
 ratio = rival / nmmm (> 1: nmmm faster or fewer evaluations). Nothing here is asserted on time.
 
-Usage: ``python benchmarks/bench_matching.py [--repeat 5] [--threads 2] [--step-nm 20] [--mode both] [--json]``
+Usage: ``python benchmarks/bench_matching.py [--repeat 5] [--threads 2] [--step-nm 20] [--mode both]
+[--colourants 3|4] [--json]``
 """
 
 from __future__ import annotations
@@ -40,16 +42,21 @@ def _args(argv=None):
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--step-nm", type=float, default=20.0)
     ap.add_argument("--mode", choices=["colorimetric", "spectral", "both"], default="both")
+    ap.add_argument("--colourants", type=int, choices=[3, 4], default=3)
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
     return ap.parse_args(argv)
 
 
 TRUE = (0.021, 0.15, 0.006)
 FREE = ["pigments.0.fraction=0.005:0.08", "pigments.1.fraction=0.02:0.25", "pigments.2.fraction=0:0.02"]
+#: the 4-colourant case adds gold nanospheres (Johnson & Christy, 40 nm: a green-absorbing plasmon band)
+TRUE4 = TRUE + (0.0008,)
+FREE4 = FREE + ["pigments.3.fraction=0:0.002"]
 
 
-def model_and_target(step_nm: float = 20.0):
-    """The 3-colourant RecipeModel and its adding–doubling target spectrum at :data:`TRUE`."""
+def model_and_target(step_nm: float = 20.0, colourants: int = 3):
+    """The 3- (or 4-) colourant RecipeModel and its adding–doubling target spectrum at :data:`TRUE`
+    (:data:`TRUE4`)."""
     import numpy as np
 
     from nmmm.matching import RecipeModel
@@ -60,8 +67,13 @@ def model_and_target(step_nm: float = 20.0):
     raw = set_key(raw, "spectral.step_nm", float(step_nm))
     raw["compounds"]["black"] = {"n": 1.9, "k": 0.6}
     raw["pigments"].append({"compound": "black", "fraction": 0.004, "diameter_nm": 60})
-    m = RecipeModel(raw, FREE)
-    return m, m.reflectance(np.array(TRUE), "ad")
+    if colourants == 4:
+        raw["compounds"]["gold"] = {"database": "main/Au/Johnson"}
+        raw["pigments"].append({"compound": "gold", "fraction": 0.0005, "diameter_nm": 40})
+    elif colourants != 3:
+        raise ValueError("colourants: 3 or 4")
+    m = RecipeModel(raw, FREE4 if colourants == 4 else FREE)
+    return m, m.reflectance(np.array(TRUE4 if colourants == 4 else TRUE), "ad")
 
 
 def run_nmmm(m, target, mode: str = "colorimetric") -> dict:
@@ -124,11 +136,11 @@ def run_plain(m, target, mode: str = "colorimetric", stop_norm: float | None = N
                 by_solver=dict(m.evaluations), de00=de, values=[float(v) for v in x], status=status)
 
 
-def benchmark(repeat: int = 5, step_nm: float = 20.0, mode: str = "colorimetric") -> dict:
-    """Warm-up, then nmmm and the plain fit alternately ``repeat`` times; medians and ratios."""
+def benchmark(repeat: int = 5, step_nm: float = 20.0, mode: str = "colorimetric", colourants: int = 3) -> dict:
+    """Warm-up, then nmmm and the plain fits alternately ``repeat`` times; medians and ratios."""
     import numpy as np
 
-    m, target = model_and_target(step_nm)
+    m, target = model_and_target(step_nm, colourants)
     who = {"nmmm": lambda: run_nmmm(m, target, mode), "plain": lambda: run_plain(m, target, mode),
            "plain-stopped": lambda: run_plain(m, target, mode, stop_norm=1e-5)}
     for f in who.values():  # warm-up: Numba compilation, caches
@@ -141,7 +153,8 @@ def benchmark(repeat: int = 5, step_nm: float = 20.0, mode: str = "colorimetric"
     med = {k: {q: float(np.median([r[q] for r in v])) for q in qs} for k, v in runs.items()}
     ratio = {q: (med["plain"][q] / med["nmmm"][q] if med["nmmm"][q] > 0 else float("inf")) for q in qs}
     ratio_stopped = {q: (med["plain-stopped"][q] / med["nmmm"][q] if med["nmmm"][q] > 0 else float("inf")) for q in qs}
-    return dict(case=f"3-colourant {mode} match, {m.wavelength_nm.size} wavelengths", true=list(TRUE),
+    return dict(case=f"{colourants}-colourant {mode} match, {m.wavelength_nm.size} wavelengths",
+                true=list(TRUE4 if colourants == 4 else TRUE),
                 repeat=repeat, threads=os.environ.get("NUMBA_NUM_THREADS"), median=med, ratio=ratio,
                 ratio_stopped=ratio_stopped,
                 last={k: v[-1] for k, v in runs.items()}, load_average=list(os.getloadavg()))
@@ -153,7 +166,7 @@ def main(argv=None):
 
     warnings.simplefilter("ignore")
     modes = ["colorimetric", "spectral"] if args.mode == "both" else [args.mode]
-    outs = [benchmark(args.repeat, args.step_nm, mode) for mode in modes]
+    outs = [benchmark(args.repeat, args.step_nm, mode, args.colourants) for mode in modes]
     if args.json:
         import json
 
@@ -177,7 +190,7 @@ def _print(out: dict, args) -> None:
     last = out["last"]
     print(f"nmmm evaluations by solver: {last['nmmm']['by_solver']}; fractions nmmm "
           f"{[round(v, 5) for v in last['nmmm']['values']]}, plain {[round(v, 5) for v in last['plain']['values']]}, "
-          f"stopped {[round(v, 5) for v in last['plain-stopped']['values']]} (true {list(TRUE)})")
+          f"stopped {[round(v, 5) for v in last['plain-stopped']['values']]} (true {out['true']})")
 
 
 if __name__ == "__main__":

@@ -33,3 +33,11 @@ def test_command_line_prints_the_table(bench, capsys):
     said = capsys.readouterr().out
     assert "nmmm match_recipe" in said and "plain least_squares" in said and "ratio plain / nmmm" in said
     assert "ratio stopped / nmmm" in said and "AD evals" in said
+
+
+def test_four_colourant_case_runs(bench):
+    out = bench.benchmark(repeat=1, step_nm=20.0, mode="spectral", colourants=4)
+    assert out["case"].startswith("4-colourant") and len(out["true"]) == 4
+    for who in ("nmmm", "plain", "plain-stopped"):
+        assert out["median"][who]["de00"] < 0.3, who
+        assert len(out["last"][who]["values"]) == 4
