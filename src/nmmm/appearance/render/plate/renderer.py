@@ -237,8 +237,11 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     brdf = plate.smooth_brdf
     rows = np.unique(np.r_[np.arange(0, Hd, step), Hd - 1]).astype(float)
     cols = np.unique(np.r_[np.arange(0, Wd, step), Wd - 1]).astype(float)
-    cd = camera.pixel_directions(rows, cols).reshape(-1, 3)
-    chit, cP = _plate_hits(camera, cd)
+    if rows.size == Hd and cols.size == Wd:  # every pixel is a node: reuse the full-resolution geometry
+        cd, chit, cP = dirs.reshape(-1, 3), hit.reshape(-1), P.reshape(-1, 3)
+    else:
+        cd = camera.pixel_directions(rows, cols).reshape(-1, 3)
+        chit, cP = _plate_hits(camera, cd)
     wo = -cd
     wo[~chit] = (0.0, 0.0, 1.0)
     wo[:, 2] = np.maximum(wo[:, 2], 0.0)
