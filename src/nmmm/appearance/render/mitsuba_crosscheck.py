@@ -113,7 +113,9 @@ def crosscheck_plate(brdf, lights=(), environment=None, position_mm=(0.0, -250.0
 
     ``lights``: nmmm :class:`~nmmm.appearance.render.PointLight` / ``DirectionalLight`` (point
     lights of zero radius: a lamp of finite size is drawn by nmmm only in the coat's mirror);
-    ``environment``: a :class:`~nmmm.appearance.render.UniformEnvironment` or None.
+    ``environment``: a :class:`~nmmm.appearance.render.UniformEnvironment`, a
+    :class:`~nmmm.appearance.render.LatLongEnvironment` (e.g. :meth:`ViewingBooth.environment`:
+    Mitsuba gets it as the ``nmmm_envmap`` emitter) or None.
     ``coarse_step`` is nmmm's smooth-grid step (1: every pixel; the default 4 of
     :func:`render_plate` interpolates a peaky flake lobe bilinearly, ≈1.4 % off at its top).
     ``table``: :func:`~nmmm.appearance.render.mitsuba_paint.paint_table` options.
@@ -128,7 +130,10 @@ def crosscheck_plate(brdf, lights=(), environment=None, position_mm=(0.0, -250.0
     pos = tuple(float(v) for v in position_mm)
     f = np.asarray(look_at_mm, float) - np.asarray(pos)
     up = (0.0, 0.0, 1.0) if np.linalg.norm(np.cross(f / np.linalg.norm(f), [0.0, 0.0, 1.0])) > 1e-3 else (0.0, 1.0, 0.0)
-    (mimg,) = render_object(brdf, "plate", list(lights), environment, position_mm=pos, look_at_mm=look_at_mm,
+    from nmmm.appearance.render.lights import LatLongEnvironment
+
+    menv = environment._on(w) if isinstance(environment, LatLongEnvironment) else environment
+    (mimg,) = render_object(brdf, "plate", list(lights), menv, position_mm=pos, look_at_mm=look_at_mm,
                             fov_deg=fov_deg, resolution=resolution, spp=spp, wavelength_nm=w,
                             plate_size_mm=plate_size_mm, sampler=sampler, table=table, seed=seed, variant=variant)
     cam = PinholeCamera(pos, tuple(float(v) for v in look_at_mm), up, fov_deg, tuple(int(v) for v in resolution))

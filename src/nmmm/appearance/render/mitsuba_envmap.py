@@ -101,7 +101,9 @@ def register_nmmm_envmap(mi):
         def _radiance(self, d, wavelengths):
             th = dr.safe_acos(d.z)
             ph = dr.atan2(d.y, d.x)
-            u = mi.Point2f(ph * (0.5 / dr.pi) + 0.5, th / dr.pi)
+            # column j holds φ in [2πj/W, 2π(j+1)/W) from +x towards +y, as LatLongEnvironment.texel
+            # (the u = φ/2π + 0.5 of Mitsuba's own envmap turned the map by 180°); φ wraps (Repeat)
+            u = mi.Point2f(ph * (0.5 / dr.pi), th / dr.pi)
             c = self.coeff.eval(u)
             vals = []
             for j in range(4):
