@@ -14,6 +14,8 @@ Usage::
     python benchmarks/bench_fft_metals.py --grids 64 128        # also 128³ (≈ 1-3 min per row)
     python benchmarks/bench_fft_metals.py --compare --cases boolean --eps -50+2j
     python benchmarks/bench_fft_metals.py --spectrum 64         # aluminium (Rakić), 81 λ, warm starts
+    python benchmarks/bench_fft_metals.py --spectrum 64 --scheduler local   # the same on 2 Dask workers
+    python benchmarks/bench_fft_metals.py --speedup 64 --n-wavelengths 16   # 1 process vs 2 Dask workers
 
 Cells: Boolean spheres p = 0.2, radius 5 voxels at 64³ (scaled with the grid); hard-core (RSA)
 spheres p = 0.2, same radius; flakes: discs of radius n/6, 2 voxels thick, lying flat, ~10 %.
@@ -98,27 +100,72 @@ def table(cases, grids, metals, compare: bool, maxiter: int):
                           flush=True)
 
 
-def spectrum(n: int, directions):
-    import nmmm.materials as M
+def spectrum(n: int, directions, scheduler=None, nwl: int = 81, workers: int = 2):
+    from nmmm.homogenize import fft_permittivity_spectrum
 
-    w = np.linspace(380.0, 780.0, 81)
-    eps_al = M.get("main/Al/Rakic").eps(w)
+    w, eps_al = aluminium(nwl)
     lab = flakes(n)
-    print(f"\n## Aluminium (Rakić) flakes {n}³ ({lab.mean():.3f}), 81 wavelengths 380-780 nm, "
-          f"complex64, tol 1e-5, warm starts, loadings {directions}")
+    where = "one process" if not scheduler else ("LocalCluster" if scheduler == "local" else scheduler)
+    print(f"\n## Aluminium (Rakić) flakes {n}³ ({lab.mean():.3f}), {nwl} wavelengths 380-780 nm, "
+          f"complex64, tol 1e-5, warm starts, loadings {directions}, {where}")
+    kw = dict(dtype="complex64", tol=1e-5, directions=directions, max_minutes=float("inf"))
     t = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = fft_permittivity(lab, {0: HOST, 1: eps_al}, dtype="complex64", tol=1e-5, directions=directions,
-                             progress=False)
+        if scheduler:
+            r = fft_permittivity_spectrum(lab, {0: HOST, 1: eps_al}, n_workers=workers,
+                                          scheduler=None if scheduler == "local" else scheduler, **kw)
+        else:
+            r = fft_permittivity(lab, {0: HOST, 1: eps_al}, progress=False, **kw)
     wall = time.perf_counter() - t
     its = np.asarray(r.iterations)
     print(f"  total {wall:.1f} s, operator {r.green}, switches: {describe_switches(r)}")
     print(f"  projections per solve: min {its.min()}, median {int(np.median(its))}, max {its.max()}, "
           f"total {its.sum()}; {wall / its.sum() * 1e3:.1f} ms per projection")
-    for k in (0, 40, 80):
+    for k in sorted({0, nwl // 2, nwl - 1}):
         print(f"  λ = {w[k]:.0f} nm: ε_Al = {complex(np.round(eps_al[k], 2))}, ε_xx = "
               f"{complex(np.round(r.tensor[k, 0, 0], 4))}")
+
+
+def aluminium(nwl: int):
+    import nmmm.materials as M
+
+    w = np.linspace(380.0, 780.0, nwl)
+    return w, M.get("main/Al/Rakic").eps(w)
+
+
+def speedup(n: int, nwl: int, directions, workers: int):
+    """The same Al-flake spectrum (nwl wavelengths, warm starts) in one process with 1 and with
+    ``workers`` threads, and on a LocalCluster of ``workers`` single-threaded processes (the
+    Dask time includes starting and closing the cluster)."""
+    from nmmm.homogenize import fft_permittivity_spectrum
+
+    w, eps_al = aluminium(nwl)
+    lab = flakes(n)
+    eps = {0: HOST, 1: eps_al}
+    kw = dict(dtype="complex64", tol=1e-5, directions=directions, max_minutes=float("inf"))
+    print(f"\n## Al flakes {n}³, {nwl} wavelengths, loadings {directions}: one process vs {workers} Dask workers")
+    rows = []
+    for label, fn in ((f"1 process, 1 thread", lambda: fft_permittivity(lab, eps, workers=1, progress=False, **kw)),
+                      (f"1 process, {workers} threads",
+                       lambda: fft_permittivity(lab, eps, workers=workers, progress=False, **kw)),
+                      (f"LocalCluster {workers} × 1 thread",
+                       lambda: fft_permittivity_spectrum(lab, eps, n_workers=workers, **kw))):
+        t = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r = fn()
+        wall = time.perf_counter() - t
+        its = np.asarray(r.iterations)
+        rows.append((label, wall, int(its.sum())))
+        extra = ""
+        if "chunks" in r.metadata:
+            extra = "; chunks " + ", ".join(f"{a}-{b - 1}: {sec:.1f} s" for a, b, sec in r.metadata["chunks"])
+        print(f"  {label:28s} {wall:7.1f} s, projections {its.sum()} (per λ median {int(np.median(its.sum(axis=-1)))})"
+              f"{extra}", flush=True)
+    base = rows[0][1]
+    for label, wall, its in rows[1:]:
+        print(f"  speed-up {label} vs 1 process 1 thread: {base / wall:.2f}; vs {rows[1][0]}: {rows[1][1] / wall:.2f}")
 
 
 def main(argv=None):
@@ -130,11 +177,17 @@ def main(argv=None):
     ap.add_argument("--maxiter", type=int, default=2000)
     ap.add_argument("--spectrum", type=int, metavar="N", help="run the 81-λ aluminium flake spectrum at N³")
     ap.add_argument("--spectrum-loadings", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--n-wavelengths", type=int, default=81)
+    ap.add_argument("--scheduler", help="'local' (LocalCluster) or tcp://HOST:8786: spread --spectrum over Dask")
+    ap.add_argument("--dask-workers", type=int, default=2)
+    ap.add_argument("--speedup", type=int, metavar="N", help="1 process vs --dask-workers Dask workers at N³")
     args = ap.parse_args(argv)
     print(f"# FFT homogenization of metal-dielectric cells (load average {os.getloadavg()[0]:.1f}, "
           f"2 workers)")
-    if args.spectrum:
-        spectrum(args.spectrum, args.spectrum_loadings)
+    if args.speedup:
+        speedup(args.speedup, args.n_wavelengths, args.spectrum_loadings, args.dask_workers)
+    elif args.spectrum:
+        spectrum(args.spectrum, args.spectrum_loadings, args.scheduler, args.n_wavelengths, args.dask_workers)
     else:
         table(args.cases, args.grids, args.eps, args.compare, args.maxiter)
 

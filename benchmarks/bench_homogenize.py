@@ -102,35 +102,73 @@ def flakes(n: int, seed: int = 0) -> np.ndarray:
     return lab
 
 
-def iteration_ratio(lab, eps, dtype, n_iter=10, rounds=3):
-    """(time per COCG iteration, bare FFT time, ratio) on ``lab``.
+def iteration_ratio(lab, eps, dtype, n_iter=10, rounds=3, green="willot2015"):
+    """(time per COCG iteration, bare FFT pair time, ratio) on ``lab``: medians of ``rounds``.
 
-    Both are means over ``n_iter`` repetitions, measured in alternating rounds (the cores are
-    shared), and the best round of each is kept. The iteration time is the difference between
-    runs of 2 + n_iter and 2 iterations, which removes set-up, right-hand side and flux.
+    The iteration time is the difference between runs of 2 + n_iter and 2 iterations (which
+    removes set-up, right-hand side and flux), divided by n_iter; the bare pair is n_iter
+    forward + inverse scipy.fft transforms of the same d-component field, in place, with the
+    same workers — timed in alternation with the solves, on the solver's own work buffer (no
+    extra field in memory).
     """
+    import statistics
+
     d = lab.ndim
-    op = green_operator(lab.shape, "willot2015")
+    op = green_operator(lab.shape, green)
     prob = Problem(lab.astype(np.uint8), 2, op, dtype, WORKERS)
     tab = np.array(eps, dtype=complex)
     e0 = np.eye(d)[0]
-    solve_cocg(prob, tab, e0, tol=1e-30, maxiter=2)  # warm up (JIT, FFT plans)
-    a = np.ones((d,) + lab.shape, dtype=dtype)
+    solve_cocg(prob, tab, e0, tol=1e-30, maxiter=2, keep_x=False)  # warm up (JIT, FFT plans)
     axes = tuple(range(1, d + 1))
-    best_it, best_fft = np.inf, np.inf
+    its, ffts = [], []
     for _ in range(rounds):
         runs = {}
         for m in (2, 2 + n_iter):
             t = time.perf_counter()
-            out = solve_cocg(prob, tab, e0, tol=1e-30, maxiter=m)
+            out = solve_cocg(prob, tab, e0, tol=1e-30, maxiter=m, keep_x=False)
             runs[m] = (time.perf_counter() - t, out.iterations)
-        best_it = min(best_it, (runs[2 + n_iter][0] - runs[2][0]) / (runs[2 + n_iter][1] - runs[2][1]))
+            del out
+        its.append((runs[2 + n_iter][0] - runs[2][0]) / (runs[2 + n_iter][1] - runs[2][1]))
+        a = prob.q.reshape((d,) + lab.shape)
         t = time.perf_counter()
         for _ in range(n_iter):
             b = scipy.fft.fftn(a, axes=axes, workers=WORKERS, overwrite_x=True)
             a = scipy.fft.ifftn(b, axes=axes, workers=WORKERS, overwrite_x=True)
-        best_fft = min(best_fft, (time.perf_counter() - t) / n_iter)
-    return best_it, best_fft, best_it / best_fft
+        ffts.append((time.perf_counter() - t) / n_iter)
+        del a, b
+    it, fft = statistics.median(its), statistics.median(ffts)
+    return it, fft, it / fft
+
+
+def peak_memory(n: int, maxiter: int = 5) -> dict:
+    """Peak resident memory (VmHWM, MiB) of a fresh process that builds the flake cell at n³ and
+    runs ``fft_permittivity`` on it (complex64, one loading, ``maxiter`` projections), as the
+    totals below do; a subprocess, so that nothing else of this run counts."""
+    import json
+    import subprocess
+
+    code = f"""
+import json, sys, warnings
+sys.path.insert(0, {str(__import__('pathlib').Path(__file__).resolve().parent)!r})
+from bench_homogenize import flakes
+from nmmm.errors import ConvergenceError
+from nmmm.homogenize import fft_permittivity
+def hwm():
+    return [int(l.split()[1]) / 1024 for l in open('/proc/self/status') if l.startswith('VmHWM')][0]
+out = {{'import': hwm()}}
+lab = flakes({n}); out['geometry'] = hwm()
+with warnings.catch_warnings():
+    warnings.simplefilter('ignore')
+    try:
+        fft_permittivity(lab, {{0: 2.25, 1: -50 + 20j}}, dtype='complex64', directions=[0], maxiter={maxiter},
+                         fallback=False, progress=False, max_minutes=float('inf'))
+    except ConvergenceError:
+        pass
+out['solve'] = hwm()
+print(json.dumps(out))
+"""
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return json.loads(res.stdout.strip().splitlines()[-1])
 
 
 def iteration_table(quick: bool):
@@ -193,7 +231,16 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="64³ only, short table")
     ap.add_argument("--no-table", action="store_true", help="skip the iterations-vs-contrast table")
     ap.add_argument("--no-ratio", action="store_true", help="skip the iteration/FFT ratio section")
+    ap.add_argument("--memory", type=int, nargs="*", metavar="N",
+                    help="only the peak memory (VmHWM) of a flake solve at each N³ (default 128 256), in subprocesses")
     args = ap.parse_args(argv)
+    if args.memory is not None:
+        for n in args.memory or [128, 256]:
+            m = peak_memory(n)
+            field = 3 * n**3 * 8 / 2**20
+            print(f"  {n}³ complex64 flake solve: peak {m['solve']:.0f} MiB (after import {m['import']:.0f}, "
+                  f"geometry {m['geometry']:.0f}; one vector field = {field:.0f} MiB)", flush=True)
+        return 0
     print("# nmmm.homogenize benchmark (scipy.fft workers=2; numpy.fft is single-threaded and not used)")
     print("\n## Time per COCG iteration / bare FFT time of the same vector field")
     sizes = [(64, 64, 64)] if args.quick else [(512, 512), (64, 64, 64), (128, 128, 128)]
