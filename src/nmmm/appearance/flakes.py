@@ -73,6 +73,7 @@ __all__ = [
     "mica_pigment",
     "aluminium_flakes",
     "FlakeLayer",
+    "edge_scatter_fraction",
     "FlakeList",
     "fresnel_unpolarized",
     "thin_film_rt",
@@ -414,6 +415,46 @@ class TiltDistribution:
         u = np.stack([s, np.zeros_like(s), mu], axis=-1)
         return np.abs(u.reshape(-1, 3) @ m.T) @ w if mu.ndim else float(np.abs(u @ m.T) @ w)
 
+    def roughened(self, alpha: float, name: str | None = None) -> "TiltDistribution":
+        """The distribution of **facet** normals of flakes whose faces are rough: each flake
+        face a GGX microfacet surface of roughness α (Walter et al. 2007), facets weighted by
+        their area projected on the flake (D(h) cos θ_h, the GGX normalisation). The flake
+        tilt and the facet offset compose as tilt vectors (small-angle: θ(cos φ, sin φ) add),
+        so the density per unit tilt-vector area is the 2-D convolution of the two. α = 0:
+        the distribution itself. The long GGX tail is what keeps far-from-specular light
+        falling smoothly with the aspecular angle."""
+        a = float(check_finite(alpha, "surface_roughness"))
+        if not 0 <= a <= 1:
+            raise InvalidInputError(f"surface_roughness (GGX alpha of the flake faces) must lie in [0, 1], got {a!r}")
+        if a == 0:
+            return self
+        # both densities per unit tilt-vector area on a 2-D grid, convolved by FFT (zero-padded)
+        n_grid = 512
+        half = np.pi / 2
+        x = (np.arange(n_grid) - n_grid // 2) * (2 * half / n_grid)
+        X, Y = np.meshgrid(x, x, indexing="ij")
+        R = np.hypot(X, Y)
+        tt = np.radians(self.tilt_deg)
+        jac = np.where(R > 0, np.sin(np.minimum(R, np.pi)) / np.maximum(R, 1e-300), 1.0)  # per sr -> per tilt area
+        p_flat = np.interp(R, tt, self.density, right=0.0) * jac
+        c = np.cos(np.minimum(R, half))
+        d = c * c * (a * a - 1.0) + 1.0
+        q_flat = np.where(R < half, a * a / (np.pi * d * d) * c, 0.0) * jac  # GGX D(h) cos θ_h, per sr
+        shape = (2 * n_grid, 2 * n_grid)
+        conv = np.fft.irfft2(np.fft.rfft2(p_flat, shape) * np.fft.rfft2(q_flat, shape), shape)
+        conv = conv[n_grid // 2:n_grid // 2 + n_grid, n_grid // 2:n_grid // 2 + n_grid]
+        # azimuthal average on rings of the output grid
+        grid = np.linspace(0.0, 90.0, 361)
+        edges = np.radians(np.concatenate([[0.0], 0.5 * (grid[1:] + grid[:-1]), [90.0 + 0.125]]))
+        k = np.clip(np.searchsorted(edges, R.ravel(), side="right") - 1, 0, grid.size)
+        inside = R.ravel() < edges[-1]
+        sums = np.bincount(k[inside], weights=np.maximum(conv.ravel()[inside], 0.0), minlength=grid.size)
+        cnt = np.bincount(k[inside], minlength=grid.size)
+        ring = np.where(cnt[:grid.size] > 0, sums[:grid.size] / np.maximum(cnt[:grid.size], 1), 0.0)
+        t = np.radians(grid)
+        dens = ring * np.where(t > 0, t / np.maximum(np.sin(t), 1e-300), 1.0)
+        return TiltDistribution(grid, dens, name=name or f"{self.name} + GGX faces alpha={a:g}")
+
     def mean_tilt_deg(self) -> float:
         th = np.radians(self.tilt_deg)
         return float(np.degrees(np.trapezoid(th * self.density * 2 * np.pi * np.sin(th), th)))
@@ -463,12 +504,20 @@ class FlakeLayer:
         The flakes lie uniformly between these fractions of the basecoat thickness (0: its
         top, 1: its bottom). Only matters when the paint has a pigmented ``medium``
         (:class:`nmmm.appearance.brdf.CoatMedium`): pigment above the band hides the flakes.
+    surface_roughness : float, default 0
+        GGX α of the flake faces (a microfacet lobe per flake; :meth:`TiltDistribution.roughened`).
+    edge_fraction : float, default 0
+        Fraction of the light meeting a flake that its edges scatter diffusely (isotropically,
+        with the flake's mean reflectance) instead of mirroring:
+        :func:`edge_scatter_fraction` (perimeter/area × edge width) gives it from the diameter.
     """
 
     optics: object
     tilt: TiltDistribution
     optical_depth: float
     depth_range: tuple = (0.0, 1.0)
+    surface_roughness: float = 0.0
+    edge_fraction: float = 0.0
 
     def __post_init__(self):
         tau = float(check_finite(self.optical_depth, "optical_depth"))
@@ -489,6 +538,14 @@ class FlakeLayer:
             raise InvalidInputError(f"depth_range must satisfy 0 <= z0 < z1 <= 1 (fractions of the coat thickness, "
                                     f"0 = top), got ({z0!r}, {z1!r})")
         object.__setattr__(self, "depth_range", (z0, z1))
+        a = float(check_finite(self.surface_roughness, "surface_roughness"))
+        if not 0 <= a <= 1:
+            raise InvalidInputError(f"surface_roughness (GGX alpha of the flake faces) must lie in [0, 1], got {a!r}")
+        fe = float(check_finite(self.edge_fraction, "edge_fraction"))
+        if not 0 <= fe < 1:
+            raise InvalidInputError(f"edge_fraction (light scattered by flake edges) must lie in [0, 1), got {fe!r}")
+        object.__setattr__(self, "surface_roughness", a)
+        object.__setattr__(self, "edge_fraction", fe)
 
     @classmethod
     def from_volume_fraction(cls, optics, tilt, volume_fraction: float, flake_thickness_nm: float,
@@ -515,6 +572,19 @@ class FlakeLayer:
             raise InvalidInputError(f"mean_diameter_nm must be > 0, got {d!r}")
         d2 = d * d * (1 + float(diameter_cv) ** 2)
         return cls(optics, tilt, na * 1e-12 * np.pi * d2 / 4)
+
+
+def edge_scatter_fraction(mean_diameter_nm: float, edge_width_nm: float = 500.0) -> float:
+    """Fraction of the light meeting a flake that its rim scatters diffusely: the rim is a
+    band of width w (wavelength scale, ragged "cornflake" edges: ~0.5 µm) round a disc of
+    diameter d, perimeter/area = 4/d, so f = 4 w / d (capped at 0.5). Silver-dollar flakes
+    (smooth, rounded rims) scatter less than cornflakes of the same size (Maile, Pfaff &
+    Reynders 2005; Pfaff, *Special Effect Pigments*, 2008)."""
+    d = float(check_finite(mean_diameter_nm, "mean_diameter_nm"))
+    w = float(check_finite(edge_width_nm, "edge_width_nm"))
+    if not d > 0 or w < 0:
+        raise InvalidInputError(f"mean_diameter_nm must be > 0 and edge_width_nm >= 0, got {d!r}, {w!r}")
+    return float(min(0.5, 4.0 * w / d))
 
 
 # --------------------------------------------------------------------------------------

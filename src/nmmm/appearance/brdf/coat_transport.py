@@ -75,8 +75,9 @@ def _on_top(R, T, Rbelow):
 
 
 def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
-    """F_ms(λ) of a paint with a coat medium (see the module docstring), and c_m(θi, θo) of its
-    lobe stored on ``tab._ms_modes`` ``(NA, NA, n_modes)`` for :mod:`ms_azimuth`."""
+    """F_ms(λ) of a paint with a coat medium (see the module docstring); the azimuthal modes
+    c_m(θi, θo) of its lobe at up to 9 wavelength nodes (indices ``tab._ms_nodes``) are stored
+    on ``tab._ms_modes_spectral`` ``(NA, NA, K, n_modes)``, linear in λ between nodes."""
     L, n = tab.L, tab.n
     th, mu, sn, dmu = gauss_nodes(n_mu)
     eye = np.eye(n_mu)
@@ -89,6 +90,12 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
         target = eps[:, None] * (tab.tau_e / tab.tau)[None, :]  # (k, L) per unit τ
         col0 = G[0, :, 1].sum(axis=(0, 1))
         G *= np.where(col0 > 0, target / np.where(col0 > 0, col0, 1.0), 0.0)[None, None, None, None]
+        fe = getattr(tab, "edge", 0.0)
+        if fe > 0:  # rims: a fraction fe of the flake interactions scattered isotropically
+            G *= 1.0 - fe
+            iso = pigment_kernels(np.zeros(L), mu, sn, dmu, 0)[0] * mu[None, None, :, None]  # columns sum to 1
+            for v, alb in enumerate((tab.edge_albedo, np.ones(L))):
+                G[0, :, v] += iso * (fe * target * alb[None, :])[None, None]
         fext = np.moveaxis(target, -1, 0) * tab.tau  # (L, k) through the whole band
     else:
         fext = np.zeros((L, n_mu))
@@ -152,10 +159,12 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
             tdir = np.exp(-fext[sel] - kap * inv_mu)
             Rb = tab.rho[sel][:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
             Mm = Mm - with_coat(tdir[:, :, None] * Rb * tdir[:, None, :])
-        ms.append(Mm.sum(axis=0))
+        ms.append(Mm)
+    # per wavelength node (coloured pigments: strongly absorbed light keeps more memory of
+    # the incidence azimuth), interpolated in wavelength by the kernel
     M0 = ms[0]
-    ok = M0 > 1e-12 * np.max(np.abs(M0))
-    c = np.stack([np.where(ok, Mm / np.where(ok, M0, 1.0), 0.0) for Mm in ms[1:]])
+    ok = M0 > 1e-12 * np.max(np.abs(M0), axis=(1, 2), keepdims=True)
+    c = np.stack([np.where(ok, Mm / np.where(ok, M0, 1.0), 0.0) for Mm in ms[1:]])  # (M, K, j, k)
     c = 0.5 * (c + np.swapaxes(c, -1, -2))
     tha = np.radians(np.linspace(0.0, 90.0, _NA))
     thp = np.arcsin(np.clip(np.sin(tha) / n, 0, 1))
@@ -164,5 +173,10 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     i0 = x.astype(int)
     W[np.arange(_NA), i0] = 1 - (x - i0)
     W[np.arange(_NA), i0 + 1] += x - i0
-    tab._ms_modes = np.ascontiguousarray(np.einsum("aj,mjk,bk->abm", W, c, W)) if np.any(F > 0) else np.zeros((1, 1, 0))
+    if np.any(F > 0):
+        tab._ms_modes_spectral = np.ascontiguousarray(np.einsum("aj,mwjk,bk->abwm", W, c, W))  # (NA, NA, K, M)
+    else:
+        tab._ms_modes_spectral = np.zeros((1, 1, 1, 0))
+    tab._ms_nodes = sel.astype(np.int64)
+    tab._ms_modes = np.zeros((1, 1, 0))  # (the wavelength-independent table of ms_azimuth: unused)
     return F

@@ -5,7 +5,10 @@ The terms are those of the package docstring with the pigments' extinction added
 path (κ = (μa + μs) H the coat's vertical optical thickness, flakes uniform in the band
 z0 … z0 + dz, internal cosines μi', μo', S' = 1/μi' + 1/μo'):
 
-- flakes: τ p(h') R / (4 μi' μo') · exp(−κ z0 S') (1 − e^−X)/X, X = τ_e S + κ dz S';
+- flakes: τ p(h') R / (4 μi' μo') · exp(−κ z0 S') (1 − e^−X)/X, X = τ_e S + κ dz S'; with
+  rough flake faces p is the facet-normal distribution (``TiltDistribution.roughened``), and
+  R is reduced by (1 − f_e), the fraction f_e scattered diffusely by the flake rims
+  (``FlakeLayer.edge_fraction``), whose light joins the multiple-scattering lobe;
 - substrate: ρ / (π (1 − ρ r_t)) · exp(−τ_e S − κ S'), r_t with the same attenuation;
 - everything else — light scattered by the pigments (once or more), pigment–flake and
   pigment–substrate interreflections — is the multiple-scattering lobe, its amount F_ms from
@@ -24,7 +27,7 @@ import numpy as np
 from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
 from nmmm.appearance.brdf.coat_transport import coat_transport
 from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
-from nmmm.appearance.brdf.interpolation import _NA, _deg, _lerp1, _lerp_table, _phi_mean
+from nmmm.appearance.brdf.interpolation import _NA, _deg, _hemi_mean, _lerp1, _lerp_table, _phi_mean
 from nmmm.appearance.brdf.ms_azimuth import azimuth_factor
 from nmmm.appearance.brdf.tables import _Tables
 from nmmm.appearance.flakes import refract_in
@@ -49,8 +52,14 @@ class _EffectTables(_Tables):
             self.kap_a, self.kap_s, self.g_pig = med.on_grid(w)
         self.kappa = self.kap_a + self.kap_s
         self.kappa0 = self.kap_s.copy()
-        z0, z1 = paint.flakes.depth_range if paint.flakes is not None else (0.0, 1.0)
+        fl = paint.flakes
+        z0, z1 = fl.depth_range if fl is not None else (0.0, 1.0)
         self.z0, self.dz = float(z0), float(z1 - z0)
+        self.edge = fl.edge_fraction if fl is not None else 0.0
+        if fl is not None and fl.surface_roughness > 0:  # rough faces: the facet-normal distribution
+            from dataclasses import replace
+
+            paint = paint.with_(flakes=replace(fl, tilt=fl.tilt.roughened(fl.surface_roughness), surface_roughness=0.0))
         super().__init__(paint, w)
 
     def _trans(self, mu, kappa):
@@ -63,6 +72,14 @@ class _EffectTables(_Tables):
 
     def _albedo_tables(self):
         n, L = self.n, self.L
+        if self.has_flakes and self.edge > 0:
+            # the rim scatters a fraction `edge` diffusely with the flake's mean reflectance
+            # (relative to the lossless one); the mirror keeps the rest
+            mu = np.cos(np.radians(np.linspace(0.0, 90.0, self.Rf.shape[0])))
+            r0 = _hemi_mean(self.Rf0, mu)
+            self.edge_albedo = np.where(r0 > 0, _hemi_mean(self.Rf, mu) / np.where(r0 > 0, r0, 1.0), 0.0)
+            self.Rf = self.Rf * (1.0 - self.edge)
+            self.Rf0 = self.Rf0 * (1.0 - self.edge)
         self.astep = 90.0 / (_NA - 1)
         tha = np.linspace(0.0, 90.0, _NA)
         mua = np.cos(np.radians(tha))
@@ -109,12 +126,12 @@ class _EffectTables(_Tables):
         dstep = (self.tilt.tilt_deg[1] - self.tilt.tilt_deg[0]) if self.has_flakes else 1.0
         with np.errstate(divide="ignore", invalid="ignore"):
             kb = np.where(self.rho > 0, self.rho / (np.pi * (1 - self.rho * self.r_t)), 0.0)
-        C = self._ms_modes
+        C = self._ms_modes_spectral
         do_ms = "multiple" in comps and bool(np.any(self.Kms > 0))
         _effect_kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
                        self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
                        np.ascontiguousarray(self.tau_e, float), np.ascontiguousarray(self.kappa, float),
-                       self.z0, self.dz, kb, self.Dms, np.asarray(self.Kms, float), C,
+                       self.z0, self.dz, kb, self.Dms, np.asarray(self.Kms, float), C, self._ms_nodes,
                        "specular" in comps, "flakes" in comps and self.has_flakes,
                        "base" in comps and bool(np.any(self.rho > 0)), do_ms)
 
@@ -153,10 +170,25 @@ class _EffectTables(_Tables):
             kb = self.rho / (np.pi * (1 - self.rho * self.r_t))
             f += TT * np.exp(-X - np.outer(S2, self.kappa) * (1 - self.dz)) * kb
         if "multiple" in comps and np.any(self.Kms > 0):
-            s = azimuth_factor(self, wi, wo)
             f += (_lerp_table(self.Dms, thi, self.astep) * _lerp_table(self.Dms, tho, self.astep) * self.Kms
-                  * (1 + s)[:, None])
+                  * (1 + self._azimuth_factor(wi, wo)))
         return f
+
+    def _azimuth_factor(self, wi, wo):
+        """s(λ) = 2 Σ c_m cos(m φ) (≥ −1) at the wavelength nodes, linear in between: (P, L)."""
+        C, nodes = self._ms_modes_spectral, self._ms_nodes
+        if C.shape[-1] == 0:
+            return np.zeros((wi.shape[0], self.L))
+        s = np.stack([azimuth_factor(_NodeView(self, C[:, :, k]), wi, wo) for k in range(nodes.size)], axis=1)
+        li = np.arange(self.L)
+        return np.stack([np.interp(li, nodes, s[p]) for p in range(s.shape[0])])
+
+
+class _NodeView:
+    """The attributes :func:`ms_azimuth.azimuth_factor` reads, for one wavelength node."""
+
+    def __init__(self, tab, C):
+        self._ms_modes, self.astep, self.has_flakes, self.Kms = C, tab.astep, True, tab.Kms
 
 
 def _pos(c, step, n_nodes):
@@ -166,13 +198,14 @@ def _pos(c, step, n_nodes):
 
 
 def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kappa, z0, dz,
-                      kb, Dms, Kms, C, do_spec, do_flakes, do_base, do_ms):
+                      kb, Dms, Kms, C, nodes, do_spec, do_flakes, do_base, do_ms):
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
     NA = Dms.shape[0]
     ND = den.shape[0]
-    M = C.shape[2]
+    M = C.shape[3]
+    K = nodes.shape[0]
     inv_n2 = 1.0 / (n * n)
     for p in _prange(P):
         ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
@@ -223,19 +256,12 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
                 t0, ft = _pos_nb(hz, dstep, ND)
                 g = tau * (den[t0] * (1.0 - ft) + den[t0 + 1] * ft) / (4.0 * ipz * opz)
                 c0, fc = _pos_nb((ipx * hx + ipy * hy) / hn + ipz * hz, step, NT)
-        ms_f = 1.0
+        cphi = 2.0  # > 1: no azimuth (a direction along the normal)
         if do_ms and M > 0:
             ri = np.sqrt(ix * ix + iy * iy)
             ro = np.sqrt(ox * ox + oy * oy)
             if ri > 1e-9 and ro > 1e-9:
                 cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-                s = 0.0
-                c_prev, c_cur = 1.0, cphi
-                for m in range(M):
-                    s += c_cur * (C[ai0, ao0, m] * (1.0 - fai) * (1.0 - fao) + C[ai0, ao0 + 1, m] * (1.0 - fai) * fao
-                                  + C[ai0 + 1, ao0, m] * fai * (1.0 - fao) + C[ai0 + 1, ao0 + 1, m] * fai * fao)
-                    c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
-                ms_f = 1.0 + max(2.0 * s, -1.0)
         for l in range(L):
             val = 0.0
             if spec_w > 0.0:
@@ -259,8 +285,29 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
                             * (Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo) * inv_n2 * sub)
             if do_ms:
                 val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
-                        * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l] * ms_f)
+                        * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l])
             out[p, l] = val
+        if cphi <= 1.0:  # azimuthal modes: s at the wavelength nodes, linear in between
+            s_prev = 0.0
+            for k in range(K):
+                s = 0.0
+                c_prev, c_cur = 1.0, cphi
+                for m in range(M):
+                    s += c_cur * (C[ai0, ao0, k, m] * (1.0 - fai) * (1.0 - fao) + C[ai0, ao0 + 1, k, m] * (1.0 - fai) * fao
+                                  + C[ai0 + 1, ao0, k, m] * fai * (1.0 - fao) + C[ai0 + 1, ao0 + 1, k, m] * fai * fao)
+                    c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
+                s = max(2.0 * s, -1.0)
+                l0 = nodes[k - 1] + 1 if k > 0 else 0
+                l1 = nodes[k] + 1 if k < K - 1 else L
+                for l in range(l0, l1):
+                    if k == 0 or l >= nodes[k]:
+                        sl = s
+                    else:
+                        t = (l - nodes[k - 1]) / (nodes[k] - nodes[k - 1])
+                        sl = s_prev * (1.0 - t) + s * t
+                    out[p, l] += sl * ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
+                                       * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l])
+                s_prev = s
 
 
 if _nb is not None:

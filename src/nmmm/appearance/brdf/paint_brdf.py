@@ -77,8 +77,10 @@ class PaintBRDF:
         if tab is None:
             if len(self._cache) > 8:
                 self._cache.clear()
-            banded = self.flakes is not None and self.flakes.depth_range != (0.0, 1.0)
-            if self.medium is not None or banded:
+            fl = self.flakes
+            effect = fl is not None and (fl.depth_range != (0.0, 1.0) or fl.surface_roughness > 0
+                                         or fl.edge_fraction > 0)
+            if self.medium is not None or effect:
                 from nmmm.appearance.brdf.effect_tables import _EffectTables
 
                 tab = _EffectTables(self, w)
