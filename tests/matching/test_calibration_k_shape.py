@@ -13,6 +13,7 @@ LADDER = {"masstone": (0.05, 0.0), "1:1": (0.04, 0.04), "1:4": (0.02, 0.08), "1:
 #: the injected perturbation: k x 1.2 with a tilt and a bow of ln k, grains 10 % larger
 TRUE = {"k_scale": 1.2, "k_legendre_1": 0.15, "k_legendre_2": -0.10, "size_scale": 1.10}
 NOISE = 0.002
+CLEAN = {}  # noise-free spectra of the ladder, by sample
 
 
 def _raw(h, r):
@@ -27,7 +28,7 @@ def ladder():
     for name, (h, r) in LADDER.items():
         rr = _raw(h, r)
         s = _Sample(LadderSample(name, rr, np.zeros(16)), "hematite")
-        clean = s.reflectance(TRUE["k_scale"], TRUE["size_scale"], (TRUE["k_legendre_1"], TRUE["k_legendre_2"]))
+        clean = CLEAN[name] = s.reflectance(TRUE["k_scale"], TRUE["size_scale"], (TRUE["k_legendre_1"], TRUE["k_legendre_2"]))
         out.append(LadderSample(name, rr, clean + rng.normal(0, NOISE, clean.size)))
     return out
 
@@ -43,6 +44,12 @@ def test_recovers_the_injected_smooth_k_change_and_size_within_its_uncertainty(r
         assert 0 < se < 0.05, (key, se)  # a usable uncertainty, not a vacuous one
         assert abs(result.values[key] - true) <= 3 * se, (key, result.values[key], true, se)
     assert result.de00_after["1:2 (left out)"] <= 1.0
+    # and against the noise-free truth (what the measured value's own noise cannot blur)
+    from nmmm.colour import delta_e2000, spectra_to_lab
+
+    w = result.wavelength_nm
+    truth = spectra_to_lab(w, CLEAN["1:2 (left out)"], "D65")
+    assert float(delta_e2000(truth, spectra_to_lab(w, result.predicted["1:2 (left out)"], "D65"))) <= 0.5
     assert max(result.de00_before.values()) > 3  # the uncorrected hematite is visibly wrong
     # the recovered k(λ) follows the injected one within the propagated uncertainty (3 σ of ln k)
     w = result.wavelength_nm
