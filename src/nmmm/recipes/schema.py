@@ -303,8 +303,14 @@ class Image(_Strict):
     flake_diameter_um: Positive = 15.0
     fov_deg: Annotated[float, Field(gt=1.0, lt=120.0)] = 25.0
     seed: int = 0
-    scene: Literal["point", "booth", "booth-overhead"] = "point"  # booth: ViewingBooth, 45° or overhead source
-    wall_reflectance: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.2  # of the booth's walls and floor
+    scene: Literal["point", "booth", "booth-overhead", "sky", "light-table"] = "point"  # booth: ViewingBooth, 45° or
+    wall_reflectance: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.2  # overhead; sky: CIE sky (nmmm.recipes.plate_image)
+    tilt_deg: Annotated[float, Field(gt=-90.0, lt=90.0)] = 0.0  # plate about its horizontal axis, far edge up
+    sky_type: Annotated[int, Field(ge=1, le=16)] = 12  # CIE S 011 general sky 1-15 (12 clear), 16 CIE overcast
+    sky_sun_elevation_deg: Annotated[float, Field(ge=0.0, le=90.0)] = 45.0
+    sky_cct_k: Annotated[float, Field(ge=4000.0, le=25000.0)] | None = None  # CIE daylight; None: D65
+    sky_illuminance_lux: Positive = 10000.0  # of the sky on a horizontal plane
+    light_table_cd_m2: Positive = 1270.0  # ISO 3664 transparency viewing
 
     @model_validator(mode="after")
     def _light_above(self):
@@ -510,9 +516,9 @@ def _check_references(r: Recipe) -> None:
             need(f"thin_film.layers[{j}].compound", lay.compound)
     if r.effect is not None:
         check_effect_references(r.effect, need)
-    if r.image is not None and r.effect is None and r.film is None and r.coats is None:
-        raise RecipeError(f"image: a plate image needs a paint ([film], [[coats]] or [effect]); a [{r.macro}] recipe "
-                          "has no painted surface to render — remove [image]")
+    if r.image is not None and r.image.scene == "light-table" and r.plate is None and r.thin_film is None:
+        raise RecipeError("image.scene: 'light-table' (the plate seen in transmission against a back-light) needs a "
+                          "[plate] or [thin_film] recipe; a paint is opaque — use 'booth', 'sky' or 'point'")
     w0, w1 = r.spectral.start_nm, r.spectral.stop_nm
     if w0 < 360 or w1 > 830:
         raise RecipeError(f"spectral: colours need a grid inside 360–830 nm (the CIE tables); got {w0:g}–{w1:g} nm")
