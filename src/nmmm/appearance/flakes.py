@@ -428,31 +428,9 @@ class TiltDistribution:
             raise InvalidInputError(f"surface_roughness (GGX alpha of the flake faces) must lie in [0, 1], got {a!r}")
         if a == 0:
             return self
-        # both densities per unit tilt-vector area on a 2-D grid, convolved by FFT (zero-padded)
-        n_grid = 512
-        half = np.pi / 2
-        x = (np.arange(n_grid) - n_grid // 2) * (2 * half / n_grid)
-        X, Y = np.meshgrid(x, x, indexing="ij")
-        R = np.hypot(X, Y)
-        tt = np.radians(self.tilt_deg)
-        jac = np.where(R > 0, np.sin(np.minimum(R, np.pi)) / np.maximum(R, 1e-300), 1.0)  # per sr -> per tilt area
-        p_flat = np.interp(R, tt, self.density, right=0.0) * jac
-        c = np.cos(np.minimum(R, half))
-        d = c * c * (a * a - 1.0) + 1.0
-        q_flat = np.where(R < half, a * a / (np.pi * d * d) * c, 0.0) * jac  # GGX D(h) cos θ_h, per sr
-        shape = (2 * n_grid, 2 * n_grid)
-        conv = np.fft.irfft2(np.fft.rfft2(p_flat, shape) * np.fft.rfft2(q_flat, shape), shape)
-        conv = conv[n_grid // 2:n_grid // 2 + n_grid, n_grid // 2:n_grid // 2 + n_grid]
-        # azimuthal average on rings of the output grid
-        grid = np.linspace(0.0, 90.0, 361)
-        edges = np.radians(np.concatenate([[0.0], 0.5 * (grid[1:] + grid[:-1]), [90.0 + 0.125]]))
-        k = np.clip(np.searchsorted(edges, R.ravel(), side="right") - 1, 0, grid.size)
-        inside = R.ravel() < edges[-1]
-        sums = np.bincount(k[inside], weights=np.maximum(conv.ravel()[inside], 0.0), minlength=grid.size)
-        cnt = np.bincount(k[inside], minlength=grid.size)
-        ring = np.where(cnt[:grid.size] > 0, sums[:grid.size] / np.maximum(cnt[:grid.size], 1), 0.0)
-        t = np.radians(grid)
-        dens = ring * np.where(t > 0, t / np.maximum(np.sin(t), 1e-300), 1.0)
+        from nmmm.appearance.flake_facets import facet_normal_density
+
+        grid, dens = facet_normal_density(self.tilt_deg, self.density, a)
         return TiltDistribution(grid, dens, name=name or f"{self.name} + GGX faces alpha={a:g}")
 
     def mean_tilt_deg(self) -> float:
