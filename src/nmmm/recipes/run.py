@@ -346,12 +346,12 @@ def _effect(recipe, mats, w, res):
                          f"reflectance factors π f at {v.illumination_deg:g}° illumination, in the plane of incidence.")
     if recipe.image is not None and recipe.outputs.images:
         images = None
-        if recipe.image.scene.startswith("booth"):  # the viewing booth (issue 19): nmmm.recipes.plate_image
+        if recipe.image.scene != "point" or recipe.image.tilt_deg:  # booth, CIE sky, tilt (issue 19): plate_image
             from nmmm.recipes.plate_image import recipe_plate_images
 
             images = recipe_plate_images(recipe, brdf, w, res.spectral_images, flakes=recipe.image.renderer == "auto")
-            res.notes.append("Images: nmmm.appearance.render — the plate in a grey viewing booth (walls "
-                             f"{recipe.image.wall_reflectance:g}, {recipe.image.scene}), tone-mapped.")
+            res.notes.append(f"Images: nmmm.appearance.render — the plate (tilt {recipe.image.tilt_deg:g}°) in the scene "
+                             f"'{recipe.image.scene}' (walls/ground {recipe.image.wall_reflectance:g}), tone-mapped.")
         elif recipe.image.renderer == "auto":
             try:
                 images = _stereo_rendered(recipe, brdf, w, res.spectral_images, coat=coat)
