@@ -335,7 +335,7 @@ class LatLongEnvironment:
     def lookup(self, wavelength_nm, directions) -> np.ndarray:
         """Radiance (..., L) seen along ``directions``, bilinear between the four nearest texel
         centres (φ periodic, θ clamped at the first/last row), as the plate renderer reads it."""
-        from nmmm.appearance.render.plate.environment import envmap_lookup_bilinear
+        from nmmm.appearance.render.latlong_lookup import envmap_lookup_bilinear
 
         return envmap_lookup_bilinear(self, wavelength_nm, directions)
 
