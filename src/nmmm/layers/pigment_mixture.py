@@ -61,6 +61,7 @@ References
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -205,7 +206,17 @@ def _gauss_mu(n_host, w, comps, L):
     dmax = max(float(c.distribution.diameter_nm.max()) for c in comps)
     x = float(np.max(np.pi * dmax * n_host / w))
     n = max(64, int(x + 4.05 * x ** (1 / 3) + 2 + L / 2) + 8)
-    return np.polynomial.legendre.leggauss(n)
+    return _leggauss(n)
+
+
+@functools.lru_cache(maxsize=32)
+def _leggauss(n: int):
+    """Gauss–Legendre nodes and weights of order ``n``, cached: NumPy's leggauss (an
+    eigenvalue problem) was ~30 % of a film evaluation in matching and calibration loops."""
+    mu, wq = np.polynomial.legendre.leggauss(n)
+    mu.flags.writeable = False
+    wq.flags.writeable = False
+    return mu, wq
 
 
 def mixture_optics(components: Sequence[Component], binder: object, wavelength_nm: ArrayLike, dependent_scattering: bool = False, cpvc: float | None = None,
