@@ -89,7 +89,7 @@ def select_colourants(model, max_colourants: int, target_reflectance=None, targe
     from nmmm.colour import delta_e2000, spectra_to_lab
     from nmmm.colour.illuminants import canonical_illuminant
     from nmmm.matching.metamerism import delta_e2000_residuals, delta_lch, metamerism_index
-    from nmmm.matching.recipe_match import _check_target, match_recipe
+    from nmmm.matching.recipe_match import _check_target, _lab_function, match_recipe
 
     palette = _palette(model)
     k = len(palette)
@@ -105,6 +105,7 @@ def select_colourants(model, max_colourants: int, target_reflectance=None, targe
     if Rt is None and target_lab is None:
         raise InvalidInputError("give a target spectrum or a target CIELAB")
     lab_t = spectra_to_lab(w, Rt, illuminant, observer) if Rt is not None else np.asarray(target_lab, float)
+    lab_of = _lab_function(w, illuminant, observer)  # the weighting factors once (= spectra_to_lab, tested)
     tests = tuple(test_illuminants) if Rt is not None else ()
     others = [i for i in range(len(model.bounds)) if i not in palette]
     subsets = [tuple(c) for n in range(1, max_colourants + 1) for c in itertools.combinations(palette, n)]
@@ -115,7 +116,7 @@ def select_colourants(model, max_colourants: int, target_reflectance=None, targe
 
         def res(u):
             R = np.clip(sub.reflectance(lo + np.clip(u, 0, 1) * span, "km"), 0, None)
-            parts = [delta_e2000_residuals(lab_t, spectra_to_lab(w, R, illuminant, observer))]
+            parts = [delta_e2000_residuals(lab_t, lab_of(R))]
             if Rt is not None:
                 parts.append((0.1 if mode == "colorimetric" else 1.0) * (R - Rt) * 100 / np.sqrt(w.size))
             return np.concatenate(parts)
