@@ -20,7 +20,7 @@ import numpy as np
 
 from nmmm.errors import RecipeError
 
-__all__ = ["recipe_paint", "recipe_plate_images", "recipe_painted_plate"]
+__all__ = ["recipe_paint", "recipe_specular_optics", "recipe_plate_images", "recipe_painted_plate"]
 
 
 def _top_binder(recipe):
@@ -80,34 +80,104 @@ def recipe_painted_plate(recipe, brdf, flakes: bool = True, image=None):
     return PaintedPlate(brdf, cell, (im.plate_cm[0] * 10.0, im.plate_cm[1] * 10.0))
 
 
-def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dict:
-    """sRGB images (name -> (H, W, 3) in [0, 1]) of the ``[image]`` plate: ``"view"`` (mono)
-    or ``"left eye"``/``"right eye"``; the spectral images go into ``keep``."""
-    from nmmm.appearance.render import PinholeCamera, PointLight, render_plate, render_stereo_plate
+def recipe_specular_optics(recipe, mats, w):
+    """The plate optics of a ``[plate]`` (a :class:`~nmmm.appearance.render.transmission.GlassPlate`
+    of ``plate.compound`` and the first of ``plate.thickness_nm``: the recipe's primary spectrum is its
+    normal transmittance) or ``[thin_film]`` recipe (a
+    :class:`~nmmm.appearance.render.transmission.ThinFilmPlate` of its stack)."""
+    from nmmm.appearance.render.transmission import GlassPlate, ThinFilmPlate
+
+    if recipe.plate is not None:
+        p = recipe.plate
+        nk = np.broadcast_to(np.asarray(mats[p.compound].nk(w)), w.shape)
+        return GlassPlate(w, nk, p.thickness_nm[0], name=f"{p.compound} plate {p.thickness_nm[0] / 1e6:g} mm")
+    from nmmm.layers.thinfilm import Layer, Stack
+
+    tf = recipe.thin_film
+    med = (lambda n: 1.0 if n is None else mats[n])
+    stack = Stack([Layer(mats[la.compound], la.thickness_nm, coherent=la.coherent) for la in tf.layers],
+                  ambient=med(tf.ambient), substrate=med(tf.substrate))
+    return ThinFilmPlate.from_stack(stack, w, name=f"thin-film stack ({len(tf.layers)} layers)")
+
+
+def _specular(recipe) -> bool:
+    return recipe.plate is not None or recipe.thin_film is not None
+
+
+def _scene_of(recipe, w, size_mm):
+    """``(lights, environment, back_radiance, tone_mapped)`` of ``[image] scene`` in the world frame.
+
+    ``"point"`` is the recipe's point light (for a glass plate: the light table; for a thin film:
+    the 45° booth, since a mirror-like plate shows only what it mirrors); ``"booth"`` /
+    ``"booth-overhead"`` the grey viewing booth; ``"sky"`` the CIE standard general sky
+    ``sky_type`` (the sun behind the plate, at ``sky_sun_elevation_deg``; ground of
+    ``wall_reflectance``); ``"light-table"`` the 45° booth with a light table of
+    ``light_table_cd_m2`` (the first illuminant's spectrum) under the plate."""
+    from nmmm.appearance.render import PointLight, ViewingBooth
 
     im = recipe.image
-    plate = recipe_painted_plate(recipe, brdf, flakes, im)
-    centre = _eye_centre_mm(im)
-    if im.scene.startswith("booth"):
-        from nmmm.appearance.render import ViewingBooth
+    illum = recipe.lighting.illuminants[0]
+    scene = im.scene
+    if scene == "point" and _specular(recipe):
+        scene = "light-table" if recipe.plate is not None else "booth"
+    if scene == "sky":
+        from nmmm.appearance.render.cie_sky import cie_sky_environment
 
-        booth = ViewingBooth(source="overhead" if im.scene == "booth-overhead" else "45", wall_reflectance=im.wall_reflectance,
-                             floor_reflectance=im.wall_reflectance, illuminant=recipe.lighting.illuminants[0])
-        kw = dict(booth.scene(plate, w), wavelength_nm=w)
-    else:
-        light = PointLight(tuple(np.asarray(im.light_position_cm, float) * 10.0), recipe.lighting.illuminants[0])
-        kw = dict(lights=[light], wavelength_nm=w)
+        env = cie_sky_environment(w, im.sky_type, im.sky_sun_elevation_deg, 90.0, im.sky_cct_k,
+                                  im.sky_illuminance_lux, im.wall_reflectance)
+        return [], env, None, True
+    if scene == "point":
+        return [PointLight(tuple(np.asarray(im.light_position_cm, float) * 10.0), illum)], None, None, False
+    booth = ViewingBooth(source="overhead" if scene == "booth-overhead" else "45", wall_reflectance=im.wall_reflectance,
+                         floor_reflectance=im.wall_reflectance, illuminant=illum)
+    booth.check_plate(type("P", (), {"size_mm": size_mm})())
+    lights, env = booth.lights(), booth.environment(w, 256, 512)
+    back = None
+    if scene == "light-table":
+        from nmmm.appearance.render.lights import spd
+        from nmmm.appearance.render.plate.environment import _KM, _luminance_weight
+
+        S = spd(illum).on(w)
+        back = im.light_table_cd_m2 * S / (_KM * float(_luminance_weight(w) @ S))
+    return lights, env, back, True
+
+
+def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dict:
+    """sRGB images (name -> (H, W, 3) in [0, 1]) of the ``[image]`` plate: ``"view"`` (mono)
+    or ``"left eye"``/``"right eye"``; the spectral images go into ``keep``.
+
+    ``brdf`` is the paint's BRDF, or for ``[plate]`` / ``[thin_film]`` recipes the plate optics of
+    :func:`recipe_specular_optics` (rendered by :func:`~nmmm.appearance.render.transmission.render_specular_plate`).
+    The plate is tilted by ``[image] tilt_deg`` about its horizontal axis (the scene is turned into
+    the plate's frame, :func:`~nmmm.appearance.render.plate_tilt.tilted_scene`)."""
+    from nmmm.appearance.render import PinholeCamera, render_plate
+    from nmmm.appearance.render.camera import stereo_pair
+    from nmmm.appearance.render.plate_tilt import tilted_scene
+
+    im = recipe.image
+    size_mm = (im.plate_cm[0] * 10.0, im.plate_cm[1] * 10.0)
+    lights, env, back, tone_mapped = _scene_of(recipe, w, size_mm)
+    centre = _eye_centre_mm(im)
     if im.stereo:
-        left, right = render_stereo_plate(plate, position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0),
-                                          interocular_mm=im.eye_separation_cm * 10.0, fov_deg=im.fov_deg,
-                                          resolution=tuple(im.pixels), **kw)
-        named = {"left eye": left, "right eye": right}
+        cams = dict(zip(("left eye", "right eye"), stereo_pair(tuple(centre), (0.0, 0.0, 0.0), im.eye_separation_cm * 10.0,
+                                                                (0.0, 1.0, 0.0), im.fov_deg, tuple(im.pixels))))
     else:
-        cam = PinholeCamera(position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0), fov_deg=im.fov_deg,
-                            resolution=tuple(im.pixels))
-        named = {"view": render_plate(plate, cam, **kw)}
+        cams = {"view": PinholeCamera(position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0), fov_deg=im.fov_deg,
+                                      resolution=tuple(im.pixels))}
+    named = {}
+    if _specular(recipe):
+        from nmmm.appearance.render.transmission import render_specular_plate
+
+        for k, cam in cams.items():
+            c, lt, e = tilted_scene(im.tilt_deg, cam, lights, env)
+            named[k] = render_specular_plate(brdf, c, size_mm, lt, e, back, w)
+    else:
+        plate = recipe_painted_plate(recipe, brdf, flakes, im)
+        for k, cam in cams.items():
+            c, lt, e = tilted_scene(im.tilt_deg, cam, lights, env)
+            named[k] = render_plate(plate, c, lights=lt, environment=e, wavelength_nm=w)
     keep.update(named)
-    if im.scene.startswith("booth"):  # a calibrated display: the booth's white tile is white, highlights tone-mapped
+    if tone_mapped:  # a calibrated display: the booth's white tile (or the light table) is white, highlights tone-mapped
         return {k: v.to_display("sRGB", im.exposure, "knee")[0] for k, v in named.items()}
     return {k: np.asarray(v.to_srgb(im.exposure), float) for k, v in named.items()}
 
@@ -115,6 +185,13 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
 def add_solid_plate_images(recipe, mats, w, res) -> None:
     """Render ``[image]`` of a solid-paint recipe into ``res`` (after its macro ran)."""
     if recipe.image is None or not recipe.outputs.images or recipe.effect is not None:
+        return
+    if _specular(recipe):
+        optics = recipe_specular_optics(recipe, mats, w)
+        res.images.update(recipe_plate_images(recipe, optics, w, res.spectral_images))
+        res.notes.append(f"Images: nmmm.appearance.render.transmission — the {optics.name} (reflectance R(θ, λ) and "
+                         "transmittance T(θ, λ) of the same optics as the recipe's spectra) in the scene "
+                         f"'{recipe.image.scene}', tilted {recipe.image.tilt_deg:g}°.")
         return
     brdf = recipe_paint(recipe, mats, w, res)
     res.images.update(recipe_plate_images(recipe, brdf, w, res.spectral_images))
