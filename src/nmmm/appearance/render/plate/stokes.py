@@ -15,8 +15,9 @@ chain, normalised to that column's S0 (so that S0 stays the unpolarized renderer
   the flake's reflection in the binder at its local angle (a metal's retardance makes the light
   elliptical: S3 ≠ 0), coat transmission coat → air, each Mueller matrix in its own plane of
   incidence and the Stokes frame rotated between them;
-- the rough coat's and the flakes' reflection of a sky or map: the same per-direction Stokes
-  vectors integrated over 8 × 16 cells of the upper hemisphere on a coarse pixel grid.
+- the rough coat's and the flakes' reflection of a sky or map (statistical, as in
+  :func:`render_plate`, also on a plate with a flake cell): the same per-direction Stokes vectors
+  integrated over 8 × 16 cells of the upper hemisphere on a coarse pixel grid.
 
 The **diffuse body and the multiple-scattering lobe are depolarizing**: they add to S0 only (their
 light crossed the coat twice, whose small diattenuation is neglected). The discrete flakes' glints
@@ -331,7 +332,8 @@ def render_plate_stokes(plate, camera, lights=(), environment=None, wavelength_n
         pol += _dirac_stokes(brdf, w, wo, xc)[..., 1:] * dirac[..., None]
     # rough coat / flakes reflecting the sky or map: coarse grid, hemisphere cells
     quad = _hemisphere(environment, w) if environment is not None else None
-    needs = brdf.coat.roughness > 0 or (stat_flakes and getattr(brdf, "flakes", None) is not None)
+    # (render_plate lights the flakes by a sky or map through the statistical term even with a flake cell)
+    needs = brdf.coat.roughness > 0 or getattr(brdf, "flakes", None) is not None
     if quad is not None and needs:
         qd, qs, qr = quad
         rows = np.unique(np.r_[np.arange(0, Hd, step), Hd - 1])
@@ -344,7 +346,7 @@ def render_plate_stokes(plate, camera, lights=(), environment=None, wavelength_n
         acc = np.zeros((cwo.shape[0], L, 3))
         for k in range(qd.shape[0]):
             wi = np.broadcast_to(qd[k], cwo.shape).copy()
-            acc += _polarized_terms(brdf, w, wi, cwo, cx, stat_flakes)[..., 1:] * (qr[k] * qs[k] * qd[k, 2])[None, :, None]
+            acc += _polarized_terms(brdf, w, wi, cwo, cx, True)[..., 1:] * (qr[k] * qs[k] * qd[k, 2])[None, :, None]
         acc = acc.reshape(rows.size, cols.size, L * 3)
         if rows.size == 1 or cols.size == 1:
             pol += acc.reshape(-1, L, 3).mean(axis=0)[None]
