@@ -81,5 +81,42 @@ def main(n_pairs: int = 1_000_000):
           f"{m} pairs): {t_fl:.2f} s; fastest whole nmmm BRDF {t_best:.2f} s (ratio {t_fl / t_best:.1f})")
 
 
+def effect_coat(n_pairs: int = 1_000_000, repeats: int = 5):
+    """Issue 18 Speed: an effect coat with pigments (Al flakes with rough faces and rims in a
+    red-pigmented basecoat, CoatMedium) against today's metallic paint (Al flakes over a grey
+    base), both through ``PaintBRDF.evaluate`` (float32), same pairs, same threads; medians of
+    ``repeats``. Returns the medians (s) and their ratio; the target is ratio <= 2."""
+    from dataclasses import replace
+
+    from nmmm.appearance.brdf import CoatMedium, metallic_paint
+    from nmmm.appearance.flakes import edge_scatter_fraction
+
+    w = np.linspace(380.0, 780.0, 81)
+    rng = np.random.default_rng(1)
+    wi, wo = random_directions(n_pairs, rng), random_directions(n_pairs, rng)
+    metallic = metallic_paint(name="metallic (Al)")
+    mu_a = 2e-4 * np.exp(-((w - 480.0) / 60.0) ** 2) + 1e-6
+    red = metallic.with_(flakes=replace(metallic.flakes, surface_roughness=0.05, edge_fraction=edge_scatter_fraction(20e3)),
+                         medium=CoatMedium(w, mu_a, 3e-5, 0.5, 2e4), name="red metallic (pigmented coat)")
+    out = {}
+    for b in (metallic, red):
+        t = time.perf_counter()
+        b.prepare(w)
+        t_prep = time.perf_counter() - t
+        b(w, wi[:1000], wo[:1000], dtype=np.float32)
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            b(w, wi, wo, dtype=np.float32)
+            times.append(time.perf_counter() - t)
+        out[b.name] = (t_prep, float(np.median(times)))
+    (p0, t0), (p1, t1) = out.values()
+    print(f"\neffect coat with pigments vs metallic kernel ({n_pairs:.0e} pairs x {w.size} wavelengths, median of "
+          f"{repeats}): metallic {t0:.2f} s (prepare {p0:.2f} s), pigmented effect coat {t1:.2f} s "
+          f"(prepare {p1:.2f} s), ratio {t1 / t0:.2f} (target <= 2)")
+    return {"metallic_s": t0, "effect_coat_s": t1, "ratio": t1 / t0, "prepare_s": p1}
+
+
 if __name__ == "__main__":
     main(int(float(sys.argv[1])) if len(sys.argv) > 1 else 1_000_000)
+    effect_coat(int(float(sys.argv[1])) if len(sys.argv) > 1 else 1_000_000)

@@ -120,20 +120,31 @@ class _EffectTables(_Tables):
 
     # -- evaluation ------------------------------------------------------------------
     def evaluate_fast(self, wi, wo, comps, out):
-        Rf = self.Rf if self.has_flakes else np.zeros((2, 1))
+        Rf = self.Rf if self.has_flakes else np.zeros((2, self.L))
         a_tab = self.a_tab if self.has_flakes else np.zeros(2)
         den = self.tilt.density if self.has_flakes else np.zeros(2)
         dstep = (self.tilt.tilt_deg[1] - self.tilt.tilt_deg[0]) if self.has_flakes else 1.0
         with np.errstate(divide="ignore", invalid="ignore"):
             kb = np.where(self.rho > 0, self.rho / (np.pi * (1 - self.rho * self.r_t)), 0.0)
         C = self._ms_modes_spectral
-        do_ms = "multiple" in comps and bool(np.any(self.Kms > 0))
+        do_ms = "multiple" in comps and bool(np.any(self.Kms > 0)) and C.shape[-1] > 0
+        nodes = self._ms_nodes
+        li = np.arange(self.L)
+        if nodes.size > 1:
+            lk = np.clip(np.searchsorted(nodes, li, side="right") - 1, 0, nodes.size - 2)
+            lw = np.clip((li - nodes[lk]) / (nodes[lk + 1] - nodes[lk]), 0.0, 1.0)
+        else:
+            lk, lw = np.zeros(self.L, np.int64), np.zeros(self.L)
+        kap = np.asarray(self.kappa, float)
+        Kms = np.asarray(self.Kms, float) if "multiple" in comps else np.zeros(self.L)
+        if "base" not in comps:
+            kb = np.zeros(self.L)
         _effect_kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
                        self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
-                       np.ascontiguousarray(self.tau_e, float), np.ascontiguousarray(self.kappa, float),
-                       self.z0, self.dz, kb, self.Dms, np.asarray(self.Kms, float), C, self._ms_nodes,
-                       "specular" in comps, "flakes" in comps and self.has_flakes,
-                       "base" in comps and bool(np.any(self.rho > 0)), do_ms)
+                       np.ascontiguousarray(self.tau_e, float), kap * self.dz, kap * self.z0, kap * (1.0 - self.dz),
+                       self.z0, self.dz, np.ascontiguousarray(kb, float), self.Dms, Kms, C,
+                       lk.astype(np.int64), lw.astype(float), "specular" in comps,
+                       "flakes" in comps and self.has_flakes, do_ms)
 
     def evaluate(self, wi, wo, comps):
         P, L = wi.shape[0], self.L
@@ -197,15 +208,15 @@ def _pos(c, step, n_nodes):
     return i, x - i
 
 
-def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kappa, z0, dz,
-                      kb, Dms, Kms, C, nodes, do_spec, do_flakes, do_base, do_ms):
+def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kd, kz0, kb1,
+                      z0, dz, kb, Dms, Kms, C, lk, lw, do_spec, do_flakes, do_ms):
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
     NA = Dms.shape[0]
     ND = den.shape[0]
-    M = C.shape[3]
-    K = nodes.shape[0]
+    M = C.shape[3] if do_ms else 0
+    K = C.shape[2]
     inv_n2 = 1.0 / (n * n)
     for p in _prange(P):
         ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
@@ -257,38 +268,14 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
                 g = tau * (den[t0] * (1.0 - ft) + den[t0 + 1] * ft) / (4.0 * ipz * opz)
                 c0, fc = _pos_nb((ipx * hx + ipy * hy) / hn + ipz * hz, step, NT)
         cphi = 2.0  # > 1: no azimuth (a direction along the normal)
-        if do_ms and M > 0:
+        if M > 0:
             ri = np.sqrt(ix * ix + iy * iy)
             ro = np.sqrt(ox * ox + oy * oy)
             if ri > 1e-9 and ro > 1e-9:
                 cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-        for l in range(L):
-            val = 0.0
-            if spec_w > 0.0:
-                val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
-            if do_flakes or do_base:
-                x = tau_e[l] * S + kappa[l] * dz * S2
-                e = np.exp(-x)
-                sub = 0.0
-                if do_flakes and g > 0.0:
-                    ph = 1.0 - 0.5 * x if x < 1e-6 else (1.0 - e) / x
-                    if z0 > 0.0:
-                        ph *= np.exp(-kappa[l] * z0 * S2)
-                    sub += g * ph * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
-                if do_base:
-                    eb = e
-                    if dz < 1.0:
-                        eb *= np.exp(-kappa[l] * (1.0 - dz) * S2)
-                    sub += eb * kb[l]
-                if sub != 0.0:
-                    val += ((Tc[i0, l] * (1.0 - fi) + Tc[i0 + 1, l] * fi)
-                            * (Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo) * inv_n2 * sub)
-            if do_ms:
-                val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
-                        * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l])
-            out[p, l] = val
-        if cphi <= 1.0:  # azimuthal modes: s at the wavelength nodes, linear in between
-            s_prev = 0.0
+        # azimuthal modes at the wavelength nodes (1 + s multiplies the lobe), linear in λ between
+        sn = np.zeros(K + 1)
+        if cphi <= 1.0:
             for k in range(K):
                 s = 0.0
                 c_prev, c_cur = 1.0, cphi
@@ -296,18 +283,26 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
                     s += c_cur * (C[ai0, ao0, k, m] * (1.0 - fai) * (1.0 - fao) + C[ai0, ao0 + 1, k, m] * (1.0 - fai) * fao
                                   + C[ai0 + 1, ao0, k, m] * fai * (1.0 - fao) + C[ai0 + 1, ao0 + 1, k, m] * fai * fao)
                     c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
-                s = max(2.0 * s, -1.0)
-                l0 = nodes[k - 1] + 1 if k > 0 else 0
-                l1 = nodes[k] + 1 if k < K - 1 else L
-                for l in range(l0, l1):
-                    if k == 0 or l >= nodes[k]:
-                        sl = s
-                    else:
-                        t = (l - nodes[k - 1]) / (nodes[k] - nodes[k - 1])
-                        sl = s_prev * (1.0 - t) + s * t
-                    out[p, l] += sl * ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
-                                       * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l])
-                s_prev = s
+                sn[k] = max(2.0 * s, -1.0)
+            sn[K] = sn[K - 1]
+        has_z0 = z0 > 0.0
+        has_below = dz < 1.0
+        for l in range(L):  # few branches, all the same for every l: vectorisable
+            x = tau_e[l] * S + kd[l] * S2
+            e = np.exp(-x)
+            fl = g * (1.0 - e) / (x + 1e-300) * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
+            if has_z0:
+                fl *= np.exp(-kz0[l] * S2)
+            eb = e * kb[l]
+            if has_below:
+                eb *= np.exp(-kb1[l] * S2)
+            val = ((Tc[i0, l] * (1.0 - fi) + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo)
+                   * inv_n2 * (fl + eb))
+            val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
+            sl = sn[lk[l]] * (1.0 - lw[l]) + sn[lk[l] + 1] * lw[l]
+            val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
+                    * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l] * (1.0 + sl))
+            out[p, l] = val
 
 
 if _nb is not None:
