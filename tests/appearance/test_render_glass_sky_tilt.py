@@ -222,3 +222,14 @@ def test_bad_glass_sky_and_tilt_input_names_the_key():
             parse_recipe(dict(d, image={key: val}))
     with pytest.raises(RecipeError, match="light-table"):
         parse_recipe(dict(d, image={"scene": "light-table"}))
+
+
+def test_shipped_light_table_example_renders_red_purple_on_white():
+    from nmmm.recipes.run import compute
+    from nmmm.recipes.schema import example_path, load_recipe
+
+    res = compute(load_recipe(example_path("gold_ruby_glass_light_table")), progress=False)
+    img, si = res.images["view"], res.spectral_images["view"]
+    rgb = img[si.on_plate].mean(0)
+    assert rgb[0] > rgb[2] > rgb[1]  # red-purple: red over blue over green
+    assert np.all(img[~si.on_plate].mean(0) > 0.9)  # the bare light table is (near) display white

@@ -79,12 +79,18 @@ def test_solid_recipe_stereo_pair():
     assert a.shape == b.shape == (16, 24, 3) and not np.array_equal(a, b)  # the eyes see the plate from 6.5 cm apart
 
 
-def test_recipe_without_a_paint_refuses_an_image_naming_the_key():
+def test_glass_recipe_takes_an_image_and_a_paint_refuses_the_light_table_naming_the_key():
+    # issue 19 item 1: a [plate] recipe now has a plate image (tests/appearance/test_render_glass_sky_tilt.py
+    # checks its radiance); the light table, a back-light, only makes sense behind a transparent plate
     p = example_path("gold_ruby_glass")
     raw = tomllib.loads(p.read_text())
     raw["image"] = {"stereo": False}
-    with pytest.raises(RecipeError, match=r"image: a plate image needs a paint.*\[plate\]"):
-        parse_recipe(raw, base_dir=p.parent)
+    assert parse_recipe(raw, base_dir=p.parent).image.scene == "point"
+    h = example_path("hematite_paint")
+    raw = tomllib.loads(h.read_text())
+    raw["image"] = {"stereo": False, "scene": "light-table"}
+    with pytest.raises(RecipeError, match=r"image.scene: 'light-table' .* needs a \[plate\] or \[thin_film\]"):
+        parse_recipe(raw, base_dir=h.parent)
 
 
 def test_render_plate_cli_takes_a_recipe(tmp_path):

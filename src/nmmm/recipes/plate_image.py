@@ -1,4 +1,4 @@
-"""Plate images of any paint recipe (issue 19 item 1).
+"""Plate images of any recipe (issue 19 items 1-2): paints, glass plates, thin-film stacks.
 
 A recipe's ``[image]`` is rendered from the **same** optics that give its colours:
 
@@ -7,7 +7,14 @@ A recipe's ``[image]`` is rendered from the **same** optics that give its colour
 - a solid paint (``[film]`` or ``[[coats]]``): a clear coat of the top binder over the
   Lambertian body whose Saunderson (1942) reading is the recipe's primary 0°/d spectrum
   (:func:`nmmm.layers.paint.body_reflectance_from_reading`, the same body the film's
-  multi-angle colours use), so that the plate's diffuse colour is the recipe's colour.
+  multi-angle colours use), so that the plate's diffuse colour is the recipe's colour;
+- a ``[plate]`` (glass) or ``[thin_film]`` recipe: its plate optics (:func:`recipe_specular_optics`,
+  :mod:`nmmm.appearance.render.transmission`), seen in transmission against a light table and in
+  reflection of the scene.
+
+``[image] scene``: ``"point"``, ``"booth"`` / ``"booth-overhead"``, ``"sky"`` (the CIE standard general
+sky, :mod:`nmmm.appearance.render.cie_sky`) or ``"light-table"``; ``tilt_deg`` tilts the plate about
+its horizontal axis (:mod:`nmmm.appearance.render.plate_tilt`).
 
 :func:`recipe_paint` gives that BRDF, :func:`recipe_plate_images` renders the mono view
 or the stereo pair with :mod:`nmmm.appearance.render`, and :func:`recipe_painted_plate`
@@ -196,6 +203,6 @@ def add_solid_plate_images(recipe, mats, w, res) -> None:
     brdf = recipe_paint(recipe, mats, w, res)
     res.images.update(recipe_plate_images(recipe, brdf, w, res.spectral_images))
     res.notes.append("Images: nmmm.appearance.render — the plate of the solid paint (a smooth clear coat of the top "
-                     "binder over the Lambertian body whose 0°/d reading is the recipe's primary spectrum) under a "
-                     "point light of the first illuminant.")
+                     "binder over the Lambertian body whose 0°/d reading is the recipe's primary spectrum) in the scene "
+                     f"'{recipe.image.scene}' (the first illuminant), tilted {recipe.image.tilt_deg:g}°.")
 
