@@ -98,16 +98,18 @@ CHUNK = 1 << 15  # voxels per parallel work item (contiguous runs per component)
 SERIAL_BELOW = 1 << 17  # smaller fields run serially: a parallel launch costs more than it saves
 
 
-def _direction_and_eps(p, q, r, beta, labels, tab, update):
+def _direction_and_eps(p, q, r, beta, labels, tab, update, sums):
     d, n = p.shape
     nchunk = (n + CHUNK - 1) // CHUNK
-    part = np.zeros((nchunk, 2))
+    part = np.zeros((nchunk, 2 + 2 * d))
     for c in prange(nchunk):
         lo = c * CHUNK
         hi = min(n, lo + CHUNK)
         acc_re = 0.0
         acc_im = 0.0
         for j in range(d):
+            s_re = 0.0
+            s_im = 0.0
             for i in range(lo, hi):
                 e = tab[labels[i]]
                 if update:
@@ -120,8 +122,14 @@ def _direction_and_eps(p, q, r, beta, labels, tab, update):
                 w = ev * v
                 acc_re += w.real
                 acc_im += w.imag
+                s_re += ev.real
+                s_im += ev.imag
+            part[c, 2 + 2 * j] = s_re
+            part[c, 3 + 2 * j] = s_im
         part[c, 0] = acc_re
         part[c, 1] = acc_im
+    for j in range(d):
+        sums[j] = part[:, 2 + 2 * j].sum() + 1j * part[:, 3 + 2 * j].sum()
     return part[:, 0].sum() + 1j * part[:, 1].sum()
 
 
@@ -175,10 +183,11 @@ _eps_par = njit(parallel=True, cache=True)(_eps_times)
 _eps_ser = njit(cache=True)(_eps_times)
 
 
-def direction_and_eps(p, q, r, beta, labels, tab, update):
-    """If ``update``: p ← r + β p. Then q ← ε p. Returns Σ ε p·p (bilinear, no conjugate)."""
+def direction_and_eps(p, q, r, beta, labels, tab, update, sums=None):
+    """If ``update``: p ← r + β p. Then q ← ε p. Returns Σ ε p·p (bilinear, no conjugate), and
+    writes Σ_voxels (ε p)_j into ``sums`` (complex128, length d) when given."""
     f = _dir_par if _parallel(p) else _dir_ser
-    return f(p, q, r, beta, labels, tab, update)
+    return f(p, q, r, beta, labels, tab, update, np.zeros(p.shape[0], np.complex128) if sums is None else sums)
 
 
 def cocg_update(x, r, p, q, alpha):
@@ -276,8 +285,9 @@ def _stencil_gradient(psi, F, kind, ih):
     return F
 
 
-def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih):
-    """x ← x + α p; r ← r − α D ψ / h (q = Γ ε p from its potential); returns (rᵀr, ‖r‖²)."""
+def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x):
+    """x ← x + α p (if ``update_x``); r ← r − α D ψ / h (q = Γ ε p from its potential); returns
+    (rᵀr, ‖r‖²)."""
     n1, n2, n3 = psi.shape
     part = np.zeros((n1, 3))
     for i1 in prange(n1):
@@ -292,9 +302,11 @@ def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih):
             base = (i1 * n2 + i2) * n3
             for c in range(3):
                 ah = alpha * ih[c]
+                if update_x:
+                    for i3 in range(n3):
+                        x[c, base + i3] = x[c, base + i3] + alpha * p[c, base + i3]
                 for i3 in range(n3):
                     i = base + i3
-                    x[c, i] = x[c, i] + alpha * p[c, i]
                     v = r[c, i] - ah * g[c, i3]
                     r[c, i] = v
                     vr = v.real
@@ -328,10 +340,10 @@ def stencil_gradient(psi, F, kind, ih):
     return f(psi, F, kind, ih)
 
 
-def cocg_update_stencil(x, r, p, psi, alpha, kind, ih):
-    """x ← x + α p; r ← r − α D ψ / h. Returns (rᵀr, ‖r‖²)."""
-    f = _us_par if _parallel(x) else _us_ser
-    return f(x, r, p, psi, alpha, kind, ih)
+def cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x=True):
+    """x ← x + α p (if ``update_x``; else x is not touched); r ← r − α D ψ / h. Returns (rᵀr, ‖r‖²)."""
+    f = _us_par if _parallel(r) else _us_ser
+    return f(x, r, p, psi, alpha, kind, ih, bool(update_x))
 
 
 @njit(cache=True)

@@ -264,8 +264,13 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
     message = ""
     it = 0
     stencil = problem.stencil  # Willot operators: q = Γ ε p enters the update through its potential
+    # without keep_x and a seed, x is never formed: ⟨ε x⟩ = Σ α_k ⟨ε p_k⟩ from the direction pass
+    # (x = Σ α_k p_k), which saves a field read and write per iteration (x's pages stay untouched)
+    lazy = stencil is not None and not keep_x and x0 is None
+    sums = np.zeros(problem.d, np.complex128)
+    flux_x = np.zeros(problem.d, np.complex128)
     while not converged and it < maxiter:
-        pq = kernels.direction_and_eps(p, q, r, ctype(beta), problem.labels, tab, True)
+        pq = kernels.direction_and_eps(p, q, r, ctype(beta), problem.labels, tab, True, sums)
         if stencil is not None:
             psi = problem.potential(q)
         else:
@@ -276,7 +281,9 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
             break
         alpha = rho / pq
         if stencil is not None:
-            rho_new, nr = kernels.cocg_update_stencil(x, r, p, psi, ctype(alpha), stencil[0], stencil[2])
+            rho_new, nr = kernels.cocg_update_stencil(x, r, p, psi, ctype(alpha), stencil[0], stencil[2], not lazy)
+            if lazy:
+                flux_x += complex(ctype(alpha)) * sums
         else:
             rho_new, nr = kernels.cocg_update(x, r, p, q, ctype(alpha))
         res = float(np.sqrt(nr)) / nb
@@ -300,7 +307,10 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
         rho = rho_new
     if not converged and not message:
         message = f"COCG reached maxiter={maxiter} with relative residual {history[-1]:.3g} > tol={tol:g}"
-    flux = problem.flux(x, tab, e0)
+    if lazy:
+        flux = problem.flux(None, tab, e0) + flux_x / problem.n
+    else:
+        flux = problem.flux(x, tab, e0)
     return SolveOutcome(x if keep_x else None, flux, problem.projections - start, history, converged, "cocg", message)
 
 
