@@ -108,6 +108,29 @@ def test_render_plate_cli_takes_a_recipe(tmp_path):
     assert bad.exit_code == 2 and "missing.toml" in bad.output and "does not exist" in bad.output
 
 
+def test_render_plate_cli_takes_glass_and_thin_film_recipes_and_a_cie_sky(tmp_path):
+    """Issue 19 items 1-2: ``--paint`` a [plate] recipe (glass on a light table, its T(θ, λ) in front of it),
+    a [thin_film] recipe (its R(θ, λ) in the booth); ``--sky TYPE`` (the CIE standard general sky)."""
+    from nmmm.recipes.render_cli import render
+
+    glass = tmp_path / "glass.toml"
+    glass.write_text(example_path("gold_ruby_glass").read_text().replace("step_nm = 5", "step_nm = 20"))
+    out = CliRunner().invoke(render, ["plate", str(tmp_path / "g"), "--paint", str(glass), "--width", "30",
+                                      "--height", "20"])
+    assert out.exit_code == 0, out.output
+    info = json.loads(out.output)
+    assert "RecipeSpecularPlate" in info["plate"] and "light table" in info["plate"] and (tmp_path / "g.png").exists()
+    film = CliRunner().invoke(render, ["plate", str(tmp_path / "f"), "--paint", str(example_path("interference_pigment")),
+                                       "--booth", "45", "--width", "30", "--height", "20"])
+    assert film.exit_code == 0, film.output
+    assert json.loads(film.output)["display"]["mono"]["plate_mean_cd_m2"] > 0
+    sky = CliRunner().invoke(render, ["plate", str(tmp_path / "s"), "--paint", "solid", "--sky", "12", "--width", "30",
+                                      "--height", "20", "--cells", "100", "60"])
+    assert sky.exit_code == 0, sky.output
+    bad = CliRunner().invoke(render, ["plate", str(tmp_path / "b"), "--paint", "solid", "--sky", "17"])
+    assert bad.exit_code == 2 and "--sky" in bad.output
+
+
 def test_recipe_image_in_the_viewing_booth():
     """[image] scene = "booth": the plate among grey walls (no black void), tone-mapped."""
     from nmmm.recipes.run import compute

@@ -171,6 +171,9 @@ def _common(f):
               help="Put the plate in a grey viewing booth lit by a D65 source at 45 deg or overhead "
                    "(replaces --light and --environment; ViewingBooth).")
 @click.option("--wall-reflectance", type=float, default=0.2, show_default=True, help="Booth walls and floor.")
+@click.option("--sky", "sky_type", type=click.IntRange(1, 16), default=None,
+              help="Light the plate by a CIE standard general sky of this type (1-15, CIE S 011; 12 clear, 16 the CIE "
+                   "overcast sky), D65, 10000 lx, the sun 45 deg high behind the plate (nmmm.appearance.render.cie_sky).")
 @click.option("--illuminance-lux", type=float, default=2000.0, show_default=True, help="Booth: at the plate centre.")
 @click.option("--tone-map", type=click.Choice(("auto", "knee", "none")), default="auto", show_default=True,
               help="PNG highlights above display white: 'knee' compresses them (SpectralImage.to_display), 'none' "
@@ -185,7 +188,7 @@ def _common(f):
 def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_deg, light_azimuth_deg, irradiance,
               environment, env_radiance, width, height, exposure, colourspace, cells, camera_mm, look_at_mm, fov_deg, stereo,
               interocular_mm, glint_spread_deg, seed, booth, wall_reflectance, illuminance_lux, tone_map,
-              max_memory_gb, stokes, polarizer_deg):
+              max_memory_gb, stokes, polarizer_deg, sky_type=None):
     """Render a painted plate to OUTPUT.exr and OUTPUT.png."""
     from nmmm.appearance.render.camera import PinholeCamera
     from nmmm.appearance.render.plate import render_plate, render_stereo_plate
@@ -206,12 +209,28 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
                               illuminant=light, illuminance_lux=illuminance_lux)
             scene = vb.scene(plate, default_wavelengths() if grid is None else grid)
             lights, env = scene["lights"], scene["environment"]
+        elif sky_type is not None:
+            from nmmm.appearance.render.cie_sky import cie_sky_environment
+            from nmmm.appearance.render.lights import default_wavelengths
+
+            lights, env = [], cie_sky_environment(default_wavelengths() if grid is None else grid, sky_type,
+                                                  ground_reflectance=wall_reflectance)
         else:
             lights, env = _lights(light, light_zenith_deg, light_azimuth_deg, irradiance, environment, env_radiance)
         kw = dict(lights=lights, environment=env, glint_spread_deg=glint_spread_deg, wavelength_nm=grid,
                   max_memory_gb=max_memory_gb)
         polarized = {}
-        if stokes or polarizer_deg is not None:
+        if hasattr(plate, "render_view"):  # a recipe's glass / thin-film plate (nmmm.recipes.render_cli) renders itself
+            from nmmm.appearance.render.camera import stereo_pair
+
+            if stokes or polarizer_deg is not None:
+                raise click.UsageError("--stokes / --polarizer render paints; a glass or thin-film recipe has no "
+                                       "polarized render yet")
+            cams = (dict(zip(("_left", "_right"), stereo_pair(camera_mm, look_at_mm, interocular_mm, (0.0, 1.0, 0.0),
+                                                              fov_deg, (width, height)))) if stereo else
+                    {"": PinholeCamera(camera_mm, look_at_mm, fov_deg=fov_deg, resolution=(width, height))})
+            named = {k: plate.render_view(c, lights, env, max_memory_gb) for k, c in cams.items()}
+        elif stokes or polarizer_deg is not None:
             from nmmm.appearance.render.camera import stereo_pair
             from nmmm.appearance.render.plate.stokes import render_plate_stokes
 

@@ -222,5 +222,5 @@ def render_specular_plate(optics, camera, size_mm=(150.0, 100.0), lights=(), env
         if isinstance(environment, LatLongEnvironment):
             qd, qs, qr = environment.upper_quadrature(w)
             white += (qs * qd[:, 2]) @ qr / np.pi
-    meta = {"plate": f"{optics.name} {s[0]:g} x {s[1]:g} mm", "light_table": back is not None}
+    meta = {"plate": f"{optics.name} {s[0]:g} x {s[1]:g} mm", "light_table": back is not None, "n_glints": 0}
     return SpectralImage(w, img, on, white, camera, meta)
