@@ -67,15 +67,16 @@ else:  # pragma: no cover
     _mirror_env = _mirror_env_py
 
 
-def _envmap_smooth(brdf, w, envmap, wo_grid, hit_grid, sub: int = 4, n_theta: int = 8, n_phi: int = 16):
+def _envmap_smooth(brdf, w, envmap, wo_grid, hit_grid, sub: int = 4, n_theta: int = 8, n_phi: int = 16, quad=None):
     """Radiance reflected from a lat-long environment by the non-Dirac BRDF terms,
     ∑_k f(ω_k, ωo) cos θ_k ΔΩ_k L_k over n_theta × n_phi cells of the upper hemisphere,
-    on every ``sub``-th node of the coarse grid, interpolated back onto it."""
+    on every ``sub``-th node of the coarse grid, interpolated back onto it (``quad``: the map's
+    ``upper_quadrature(w, n_theta, n_phi)`` if already computed)."""
     nr, nc = wo_grid.shape[:2]
     rs = np.unique(np.r_[np.arange(0, nr, sub), nr - 1])
     cs = np.unique(np.r_[np.arange(0, nc, sub), nc - 1])
     wo = wo_grid[np.ix_(rs, cs)].reshape(-1, 3)
-    qd, qs, qr = envmap.upper_quadrature(w, n_theta, n_phi)
+    qd, qs, qr = envmap.upper_quadrature(w, n_theta, n_phi) if quad is None else quad
     N, K = wo.shape[0], qd.shape[0]
     out = np.zeros((N, w.size))
     comps = ("specular", "flakes", "base", "multiple")

@@ -268,8 +268,11 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     coarse[~chit] = 0.0
     coarse = coarse.reshape(rows.size, cols.size, L)
     if envmap is not None:
+        quad = envmap.upper_quadrature(w)  # once: the smooth part and the white reference
         coarse += _envmap_smooth(brdf, w, envmap, wo.reshape(rows.size, cols.size, 3), chit.reshape(rows.size, cols.size),
-                                 sub=_envmap_sub(brdf, camera, step))
+                                 sub=_envmap_sub(brdf, camera, step), quad=quad)
+        r = envmap._on(w)
+        env32 = np.ascontiguousarray(r.reshape(-1, L), np.float32)  # the map once in float32 (background, mirror)
     if rows.size == 1:
         coarse = np.concatenate([coarse, coarse], axis=0)
         rows = np.r_[rows, rows + 1]
@@ -293,9 +296,7 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     bg = background if background is not None else env
     off = ~on
     if bg is None and envmap is not None:  # the map seen past the plate, bilinear between texels
-        r = envmap._on(w)
-        _background(img, np.ascontiguousarray(dirs, float), off, r.shape[0], r.shape[1],
-                     np.ascontiguousarray(r.reshape(-1, L), np.float32))
+        _background(img, np.ascontiguousarray(dirs, float), off, r.shape[0], r.shape[1], env32)
     elif bg is None:
         img[off] = 0.0
     else:
@@ -305,10 +306,8 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     if envmap is not None and hasattr(brdf, "specular_reflectance"):
         Fc = brdf.specular_reflectance(w, wo).reshape(coarse_shape)
         if np.any(Fc > 0):  # the view ray mirrored at the plate; the map bilinear between texels
-            r = envmap._on(w)
             _mirror_env(img, np.ascontiguousarray(Fc, np.float32), ri.astype(np.int64), rf, ci.astype(np.int64), cf,
-                        np.ascontiguousarray(dirs, float), on, r.shape[0], r.shape[1],
-                        np.ascontiguousarray(r.reshape(-1, L), np.float32))
+                        np.ascontiguousarray(dirs, float), on, r.shape[0], r.shape[1], env32)
 
     # --- mirror images of finite-size lights in a smooth clear coat (the coat's Dirac)
     if hasattr(plate.smooth_brdf, "specular_reflectance"):
@@ -329,7 +328,7 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     if env is not None:
         white += env
     if envmap is not None:
-        qd, qs, qr = envmap.upper_quadrature(w)
+        qd, qs, qr = quad
         white += (qs * qd[:, 2]) @ qr / np.pi
     meta = {"plate": repr(plate), "glint_spread_deg": sig, "n_glints": int(n_glints), "coarse_step": step}
     return SpectralImage(w, img, on, white, camera, meta)
