@@ -114,7 +114,8 @@ def _variance_check(plate, cam, light, spread=1.0, bands=4):
 
 
 def _recipe_images(out, resolution):
-    """Every shipped paint recipe in the booth (mono, ``resolution``): PNG + stats."""
+    """Every shipped recipe's plate (mono, ``resolution``) in the booth, or in its own scene
+    (light table, sky): PNG + stats."""
     from nmmm.recipes.run import compute
     from nmmm.recipes.schema import parse_recipe, read_toml
 
@@ -123,11 +124,10 @@ def _recipe_images(out, resolution):
     for path in sorted(examples.glob("*.toml")):
         data, _, base = read_toml(path)
         data = dict(data)
-        if not any(k in data for k in ("film", "coats", "effect")):
-            skipped.append(path.stem)
-            continue
         im = dict(data.get("image", {}))
-        im.update(scene="booth", stereo=False, pixels=list(resolution), fov_deg=25.0, distance_cm=40.0, exposure=1.0)
+        scene = im.get("scene", "point")  # a recipe's own scene (light table, sky, overhead booth) is kept
+        im.update(scene="booth" if scene == "point" else scene, stereo=False, pixels=list(resolution), fov_deg=25.0,
+                  distance_cm=40.0, exposure=1.0)
         data["image"] = im
         try:
             res = compute(parse_recipe(data, base_dir=base), progress=False)
@@ -227,8 +227,8 @@ def demo(output_dir, resolution=(960, 640), small_resolution=(480, 320), recipes
         figures += rfig
         files += [Path(f) for f in rfig]
         tables.update({f"recipe {k}": v for k, v in rtab.items()})
-        recipe_note = (f" Every shipped paint recipe ({', '.join(rtab)}) is shown in the same booth"
-                       + (f"; not rendered (no painted surface): {', '.join(skipped)}." if skipped else ".")
+        recipe_note = (f" Every shipped recipe ({', '.join(rtab)}) is shown in the same booth (or its own scene)"
+                       + (f"; not rendered: {', '.join(skipped)}." if skipped else ".")
                        + (f" Failed: {'; '.join(failed)}." if failed else ""))
     # a painted sphere through Mitsuba 3, when the optional extra is usable
     try:
