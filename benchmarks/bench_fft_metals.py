@@ -21,6 +21,23 @@ Cells: Boolean spheres p = 0.2, radius 5 voxels at 64³ (scaled with the grid); 
 spheres p = 0.2, same radius; flakes: discs of radius n/6, 2 voxels thick, lying flat, ~10 %.
 The machine's cores are shared: times are wall times of this run, iteration counts are not
 affected by the load.
+
+Measured, session 4 (2026-12-02, load 10-12 on 2 cores, defaults, complex64 asked, tol 1e-5, x)
+------------------------------------------------------------------------------------------
+| cell | grid | ε metal | operator | projections | time |
+|---|---|---|---|---|---|
+| flakes (0.10) | 128³ | −44+13i | willot2015 c64 | 200 | 178 s |
+| flakes (0.10) | 128³ | −50+5i | willot2014 c128 (switch) | 562 | 898 s |
+| flakes (0.10) | 128³ | −50+2i, −50+1i | willot2014 c128 | not finished (> 20 min, killed) | |
+Why the 128³ flakes are hard: the flakes here keep 2 voxels of thickness at every grid, so at
+128³ (r = 21) they are twice as flat as at 64³. For two phases, Γ ε Γ = ε_h Γ + (ε_m − ε_h) Γ χ Γ
+has its eigenvalues on the segment ε_h + (ε_m − ε_h) μ, μ ∈ [0, 1] the spectrum of the real
+symmetric Γ χ Γ; it comes within ε_h Im ε_m / |ε_m − ε_h| ≈ 0.04 (−50 + 1i) of zero where
+μ ≈ ε_h / (ε_h − ε_m), i.e. at the in-plane plasmon of discs of depolarisation factor
+L ≈ π t / 4D ≈ 0.04 (resonance at ε_m ≈ ε_h (1 − 1/L) ≈ −58). A low-loss metal near that
+resonance makes any Krylov solver slow (the problem is near-singular, not badly scaled):
+no operator or precision switch removes it (the loss or the flake shape does). Real aluminium in the visible (Rakić,
+Im ε / |ε| ≥ 0.19) is on the default fast path (willot2015, complex64).
 """
 
 from __future__ import annotations

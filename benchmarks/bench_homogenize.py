@@ -2,9 +2,9 @@
 
 What it reports
 ---------------
-1. Cost of one COCG iteration against the bare FFTs it needs: a vector field (d components)
-   forward and back with scipy.fft (2 workers, in place) — the floor of any FFT solver.
-   Target: ratio <= 1.5 (the element-wise work is fused in Numba kernels).
+1. Cost of one COCG iteration against the bare FFT pair a user would write: a vector field
+   (d components) forward and back with scipy.fft (2 workers, in place). nmmm's iteration does
+   d forward FFTs and one inverse (the Willot operators' rank-one form). Target: ratio <= 1.3.
 2. Projections (iterations) against contrast for COCG (default), BiCGStab, GMRES,
    Eyre-Milton and the basic Moulinec-Suquet scheme, with the three Green operators, on a
    2-D Boolean model (metal ε = −50 + {20, 5, 1}i in ε = 2.25) and a 3-D one (64³, −50 + 2i).
@@ -20,6 +20,17 @@ Usage::
 
 The machine's cores are shared: ratios measured in the same run are meaningful, absolute
 times less so.
+
+Session 4, 2026-12-02 (after the rank-one form of Γ: 3 forward FFTs + 1 inverse per iteration)
+-------------------------------------------------------------------------------------
+- Iteration / bare FFT pair (6 FFTs), 128³ complex64, Boolean spheres, willot2015:
+  run_all.py at load 11: 1.23 (1 thread), 1.39 (2 threads); CPU time at 1 thread, load 5-11,
+  medians of 5: 1.23-1.33 (warm-start path, x formed) — was 1.72 (1.89 in run_all). In-loop
+  parts at 1 thread (ms): direction + ε 17-19, 3 FFTs 51-53, potential 12, 1 inverse FFT 18,
+  stencil update 21 (bare pair 101-106).
+- Peak memory (``--memory``, VmHWM of a fresh process, flake solve, complex64, one loading):
+  128³ 384 MiB, 256³ 1484 MiB (x not formed for a single wavelength; 1868 MiB with it; the
+  harness peaked at 4.1 GB before, with a separate FFT array and the kept fields).
 
 Re-measured 2026-12-02 (benchmarks/run_all.py, medians of 5 alternating runs, load 4-5)
 -------------------------------------------------------------------------------------
