@@ -310,6 +310,7 @@ class Image(_Strict):
     sky_sun_elevation_deg: Annotated[float, Field(ge=0.0, le=90.0)] = 45.0
     sky_cct_k: Annotated[float, Field(ge=4000.0, le=25000.0)] | None = None  # CIE daylight; None: D65
     sky_illuminance_lux: Positive = 10000.0  # of the sky on a horizontal plane
+    sky_sun_lux: Annotated[float, Field(ge=0.0)] = 0.0  # the sun's disc, normal to its rays (0: none)
     light_table_cd_m2: Positive = 1270.0  # ISO 3664 transparency viewing
 
     @model_validator(mode="after")
