@@ -174,7 +174,7 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     W[np.arange(_NA), i0] = 1 - (x - i0)
     W[np.arange(_NA), i0 + 1] += x - i0
     if np.any(F > 0):
-        tab._ms_modes_spectral = np.ascontiguousarray(np.einsum("aj,mwjk,bk->abwm", W, c, W))  # (NA, NA, K, M)
+        tab._ms_modes_spectral = np.ascontiguousarray(np.einsum("aj,mwjk,bk->abwm", W, c, W, optimize=True))  # (NA, NA, K, M)
     else:
         tab._ms_modes_spectral = np.zeros((1, 1, 1, 0))
     tab._ms_nodes = sel.astype(np.int64)

@@ -140,7 +140,7 @@ def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int 
     f = x - i0
     W[np.arange(_NA), i0] = 1 - f
     W[np.arange(_NA), i0 + 1] += f
-    return np.ascontiguousarray(np.einsum("aj,mjk,bk->abm", W, c, W))
+    return np.ascontiguousarray(np.einsum("aj,mjk,bk->abm", W, c, W, optimize=True))
 
 
 def _add_modes_py(wi, wo, out, Dms, Kms, C, astep):
