@@ -136,3 +136,41 @@ def test_a_ladder_whose_recipes_differ_in_what_the_empirical_fit_cannot_use(ladd
         calibrate_empirical(ladder[:3])
     with pytest.raises(InvalidInputError, match="left_out names"):
         calibrate_empirical(ladder, left_out=("nope",))
+
+
+def _fresnel_unpolarised(n, theta_i_deg):
+    """Fresnel reflectance (s and p averaged) from a medium of index n into air, at internal angle θ_i."""
+    ti = np.radians(theta_i_deg)
+    tt = np.arcsin(n * np.sin(ti))
+    rs = (n * np.cos(ti) - np.cos(tt)) / (n * np.cos(ti) + np.cos(tt))
+    rp = (np.cos(ti) - n * np.cos(tt)) / (np.cos(ti) + n * np.cos(tt))
+    return 0.5 * (rs**2 + rp**2)
+
+
+def test_the_surface_correction_follows_the_geometry_of_the_ladder():
+    """0:d includes the specular component like di:8; at 0:45a / 45a:0 the diffuse flux leaves
+    towards the 45° viewer: R = (1 − k1)(1 − R_F(45°)) R_b / (n² (1 − k2 R_b)) (Saunderson 1942;
+    Völz 2001 §3.4), written here from Fresnel's equations."""
+    base = _ladder()
+    for geometry, specular in (("0:d", "included"), ("di:8", "included"), ("de:8", "excluded"), ("45a:0", "excluded")):
+        lad = [LadderSample(s.name, set_key(s.recipe, "measurement.geometry", geometry), s.reflectance) for s in base[:4]]
+        cal = calibrate_empirical(lad)
+        assert (cal.specular, cal.geometry) == (specular, geometry)
+        if geometry.startswith("45"):
+            lam = cal.wavelength_nm / 1000
+            n = 1.566 + 0.00796 / lam**2 + 0.00014 / lam**4
+            ex = (1 - _fresnel_unpolarised(n, np.degrees(np.arcsin(np.sin(np.radians(45.0)) / n)))) / n**2
+            np.testing.assert_allclose(cal.exit_factor, ex, rtol=1e-9)
+        else:
+            assert cal.exit_factor is None
+    # K and S of known colourants are recovered from films 'measured' at 45a:0 with that form
+    c, X, Rg, _ = _synthetic_films()
+    Km, Sm = c @ K_TRUE, c @ S_TRUE
+    n = 1.55
+    ex = (1 - _fresnel_unpolarised(n, np.degrees(np.arcsin(np.sin(np.radians(45.0)) / n)))) / n**2
+    Rb = np.where(Rg[:, None] == 0, r_over_black(Km, Sm, X[:, None]), r_over(Km, Sm, X[:, None], Rg[:, None]))
+    R = (1 - K1) * ex * Rb / (1 - K2 * Rb)
+    np.testing.assert_allclose(empirical_reflectance(Km, Sm, X[:, None], Rg[:, None], K1, K2, exit_factor=ex), R, rtol=1e-12)
+    K, S, rms = fit_km_constants(c[:7], X[:7], Rg[:7], R[:7], K1, K2, exit_factor=ex)
+    np.testing.assert_allclose(S, S_TRUE, rtol=1e-4)
+    np.testing.assert_allclose(K[0], K_TRUE[0], rtol=1e-4)

@@ -8,7 +8,9 @@ files as the physical calibration (:mod:`nmmm.matching.calibration`), so both ca
 - :func:`empirical_reflectance` — the measured reflectance of a film: Kubelka's hyperbolic
   solution for thickness X over a substrate R_g (:func:`nmmm.layers.km_reflectance`), then
   Saunderson's surface correction R = k1 + (1 − k1)(1 − k2) R_b / (1 − k2 R_b), the k1 term
-  dropped when the specular component is excluded (de:8, 45:0).
+  dropped when the specular component is excluded (de:8, 0:45a, 45a:0); at 0:45a / 45a:0 the
+  diffuse flux leaves towards the 45° viewer through the surface, (1 − k2) → (1 − R_F(45°))/n²
+  (``exit_factor``; the same forms as :func:`nmmm.layers.geometries.geometry_reflectance`).
 - :func:`fit_km_constants` — K_i(λ), S_i(λ) per unit concentration fitted wavelength by
   wavelength (least squares on ln K, ln S) to measured films of known concentrations, thicknesses
   and substrates.
@@ -70,23 +72,29 @@ def duncan_mixing(concentrations, K, S) -> tuple[np.ndarray, np.ndarray]:
     return c @ np.asarray(K, float), c @ np.asarray(S, float)
 
 
-def empirical_reflectance(K_mix, S_mix, thickness_um, substrate_reflectance, k1, k2, specular: str = "excluded") -> np.ndarray:
+def empirical_reflectance(K_mix, S_mix, thickness_um, substrate_reflectance, k1, k2, specular: str = "excluded",
+                          exit_factor=None) -> np.ndarray:
     """Measured reflectance of a KM film of ``K_mix``, ``S_mix`` (per µm) and ``thickness_um`` over
-    a substrate, with Saunderson's correction (module docstring); everything broadcasts."""
+    a substrate, with Saunderson's correction (module docstring); everything broadcasts.
+    ``exit_factor``: what of the internal diffuse flux reaches the instrument, 1 − k2 (sphere
+    geometries, the default) or (1 − R_F(45°))/n² (0:45a, 45a:0)."""
     from nmmm.layers.kubelka_munk import km_reflectance, saunderson
 
     Rb = km_reflectance(np.maximum(K_mix, 0.0), np.maximum(S_mix, 0.0), thickness_um, substrate_reflectance)
-    return saunderson(Rb, k1, k2, specular=specular)
+    if exit_factor is None:
+        return saunderson(Rb, k1, k2, specular=specular)
+    body = (1 - np.asarray(k1, float)) * np.asarray(exit_factor, float) * Rb / (1 - np.asarray(k2, float) * Rb)
+    return body + k1 if specular == "included" else body
 
 
-def _inverse_saunderson(R, k1, k2, specular):
+def _inverse_saunderson(R, k1, k2, specular, exit_factor=None):
     """R_b from a measured R (Saunderson's relation solved for R_b)."""
     r = R - k1 if specular == "included" else R
-    a = (1 - k1) * (1 - k2)
+    a = (1 - k1) * ((1 - k2) if exit_factor is None else exit_factor)
     return np.clip(r / (a + k2 * r), 1e-4, 0.9999)
 
 
-def _start(c, q, X, Rg, R, k1, k2, specular):
+def _start(c, q, X, Rg, R, k1, k2, specular, exit_factor=None):
     """A start for one wavelength: K/S of each film from R∞ (opaque approximation), the homogeneous
     Duncan system Σ c_i K_i − q Σ c_i S_i = 0 solved for the ratios (smallest singular vector), the
     common scale by a 1-D search on the full model."""
@@ -98,7 +106,7 @@ def _start(c, q, X, Rg, R, k1, k2, specular):
     best = None
     for scale in np.geomspace(1e-3, 1e3, 13):
         K, S = v[:m] * scale, v[m:] * scale
-        r = empirical_reflectance(c @ K, c @ S, X, Rg, k1, k2, specular) - R
+        r = empirical_reflectance(c @ K, c @ S, X, Rg, k1, k2, specular, exit_factor) - R
         e = float(r @ r)
         if best is None or e < best[0]:
             best = (e, np.log(np.concatenate([K, S])))
@@ -106,11 +114,12 @@ def _start(c, q, X, Rg, R, k1, k2, specular):
 
 
 def fit_km_constants(concentrations, thickness_um, substrate_reflectance, reflectance, k1, k2,
-                     specular: str = "excluded") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                     specular: str = "excluded", exit_factor=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """K and S (each (m, n_λ), per µm per unit fraction) of m colourants from n films.
 
     ``concentrations`` (n, m) volume fractions; ``thickness_um`` (n,); ``substrate_reflectance``
-    (n,) or (n, n_λ); ``reflectance`` (n, n_λ) measured; ``k1``, ``k2`` (n_λ,) or scalars. Each
+    (n,) or (n, n_λ); ``reflectance`` (n, n_λ) measured; ``k1``, ``k2`` (and ``exit_factor``,
+    :func:`empirical_reflectance`) (n_λ,) or scalars. Each
     wavelength is a least-squares fit of ln K_i, ln S_i (trf, bounded), started from the opaque
     Duncan solution and from the previous wavelength's solution, the better kept. Returns
     ``(K, S, rms)`` with ``rms`` the residual RMS per wavelength.
@@ -144,18 +153,20 @@ def fit_km_constants(concentrations, thickness_um, substrate_reflectance, reflec
     Rg = np.broadcast_to(np.asarray(substrate_reflectance, float).reshape(n, -1), (n, nw))
     k1 = np.broadcast_to(np.asarray(k1, float), (nw,))
     k2 = np.broadcast_to(np.asarray(k2, float), (nw,))
+    ex = None if exit_factor is None else np.broadcast_to(np.asarray(exit_factor, float), (nw,))
     K, S, rms = np.zeros((m, nw)), np.zeros((m, nw)), np.zeros(nw)
     prev = None
     for j in range(nw):
-        Rb = _inverse_saunderson(R[:, j], k1[j], k2[j], specular)
+        ej = None if ex is None else ex[j]
+        Rb = _inverse_saunderson(R[:, j], k1[j], k2[j], specular, ej)
         q = (1 - Rb) ** 2 / (2 * Rb)
 
-        def res(z, j=j):
+        def res(z, j=j, ej=ej):
             e = np.exp(z)
-            return empirical_reflectance(c @ e[:m], c @ e[m:], X, Rg[:, j], k1[j], k2[j], specular) - R[:, j]
+            return empirical_reflectance(c @ e[:m], c @ e[m:], X, Rg[:, j], k1[j], k2[j], specular, ej) - R[:, j]
 
         best = None
-        for z0 in [_start(c, q, X, Rg[:, j], R[:, j], k1[j], k2[j], specular)] + ([prev] if prev is not None else []):
+        for z0 in [_start(c, q, X, Rg[:, j], R[:, j], k1[j], k2[j], specular, ej)] + ([prev] if prev is not None else []):
             r = least_squares(res, z0, bounds=_LN_BOUNDS, method="trf", xtol=1e-10, ftol=1e-12, gtol=1e-12)
             if best is None or r.cost < best.cost:
                 best = r
@@ -182,6 +193,8 @@ class EmpiricalCalibration:
     rms: np.ndarray = field(default_factory=lambda: np.zeros(0))
     time_s: float = 0.0
     illuminant: str = "D65"
+    exit_factor: np.ndarray | None = None  # (1 − R_F(45°))/n² at 0:45a / 45a:0; None: 1 − k2
+    geometry: str = "de:8"
 
     def reflectance(self, concentrations: dict, thickness_um: float, substrate_reflectance) -> np.ndarray:
         """The predicted spectrum of a film of ``concentrations`` (compound → volume fraction)."""
@@ -190,7 +203,8 @@ class EmpiricalCalibration:
             raise InvalidInputError(f"no K, S for {unknown}: this calibration has {list(self.colourants)}")
         c = np.array([concentrations.get(k, 0.0) for k in self.colourants])
         Km, Sm = duncan_mixing(c, self.K, self.S)
-        return empirical_reflectance(Km, Sm, thickness_um, substrate_reflectance, self.k1, self.k2, self.specular)
+        return empirical_reflectance(Km, Sm, thickness_um, substrate_reflectance, self.k1, self.k2, self.specular,
+                                     self.exit_factor)
 
     def table(self) -> list[dict]:
         """One row per wavelength: K and S of each colourant (per µm per unit fraction), k1, k2."""
@@ -209,7 +223,7 @@ _VARIABLE = ("name", "description")  # keys of a ladder sample that the empirica
 
 
 def _film_of(sample):
-    """(wavelength, concentrations {compound: fraction}, thickness µm, substrate R, n_binder, specular, signature)."""
+    """(wavelength, concentrations {compound: fraction}, thickness µm, substrate R, n_binder, geometry, signature, pigments)."""
     from nmmm.recipes.paint_stack import geometry_of
     from nmmm.matching.calibration import _materials
     from nmmm.recipes.run import _grid
@@ -228,7 +242,6 @@ def _film_of(sample):
     mats = _materials(raw, rec, w, base)
     nb = np.asarray(mats[rec.binder.compound].nk(w)).real
     g = geometry_of(rec)
-    specular = "included" if g.lower().startswith("di") else "excluded"
     sig = copy.deepcopy({k: v for k, v in raw.items() if k not in _VARIABLE})
     film = dict(sig.get("film", {}))
     film.pop("thickness_nm", None)
@@ -239,7 +252,7 @@ def _film_of(sample):
         q = {k: v for k, v in p.items() if k != "fraction"}
         if p.get("fraction", 0) > 0 or q["compound"] not in pigs:
             pigs[q["compound"]] = q
-    return w, conc, rec.film.thickness_nm / 1000.0, rec.film.substrate_reflectance, nb, specular, sig, pigs
+    return w, conc, rec.film.thickness_nm / 1000.0, rec.film.substrate_reflectance, nb, g, sig, pigs
 
 
 def _check_same_base(films, names):
@@ -261,6 +274,24 @@ def _check_same_base(films, names):
             ref_pigs.setdefault(comp, q)
         if not np.array_equal(f[0], films[0][0]):
             raise InvalidInputError(f"sample {name!r}: its wavelength grid differs from sample {names[0]!r}'s")
+
+
+def _surface_terms(geometry: str, n_binder) -> tuple[str, np.ndarray | None]:
+    """(specular, exit_factor) of Saunderson's correction at the recipe's geometry, as
+    :func:`nmmm.layers.geometries.geometry_reflectance` has them: di:8 and 0:d include the
+    specular component, de:8 excludes it; 0:45a and 45a:0 exclude it and the diffuse flux
+    leaves at 45° through the surface, (1 − R_F(45°))/n² in place of 1 − k2."""
+    from nmmm.layers.fresnel_equations import fresnel
+    from nmmm.layers.geometries import check_geometry
+
+    g = check_geometry(geometry)
+    if g in ("di:8", "0:d"):
+        return "included", None
+    if g == "de:8":
+        return "excluded", None
+    n = np.asarray(n_binder, float)
+    r45 = fresnel(n, 1.0, np.degrees(np.arcsin(np.sin(np.radians(45.0)) / n))).R
+    return "excluded", np.asarray((1 - r45) / n**2, float)
 
 
 def calibrate_empirical(samples, left_out=(), illuminant: str = "D65") -> EmpiricalCalibration:
@@ -292,9 +323,11 @@ def calibrate_empirical(samples, left_out=(), illuminant: str = "D65") -> Empiri
         raise InvalidInputError(f"{R.shape[1]} measured values per sample, the recipes' grid has {w.size}")
     nb = films[0][4]
     k1, k2 = np.asarray(saunderson_k1(nb), float), np.asarray(saunderson_k2(nb), float)
-    specular = films[0][5]
-    K, S, rms = fit_km_constants(c[fitted], X[fitted], Rg[fitted], R[fitted], k1, k2, specular)
-    cal = EmpiricalCalibration(colourants, w, K, S, k1, k2, specular, {}, tuple(left_out), rms=rms, illuminant=illuminant)
+    geometry = films[0][5]
+    specular, exit_factor = _surface_terms(geometry, nb)
+    K, S, rms = fit_km_constants(c[fitted], X[fitted], Rg[fitted], R[fitted], k1, k2, specular, exit_factor)
+    cal = EmpiricalCalibration(colourants, w, K, S, k1, k2, specular, {}, tuple(left_out), rms=rms, illuminant=illuminant,
+                               exit_factor=exit_factor, geometry=geometry)
     for i, name in enumerate(names):
         pred = cal.reflectance(dict(zip(colourants, c[i])), X[i], Rg[i])
         cal.predicted[name] = pred
