@@ -233,3 +233,20 @@ def test_shipped_light_table_example_renders_red_purple_on_white():
     rgb = img[si.on_plate].mean(0)
     assert rgb[0] > rgb[2] > rgb[1]  # red-purple: red over blue over green
     assert np.all(img[~si.on_plate].mean(0) > 0.9)  # the bare light table is (near) display white
+
+
+def test_sun_and_sky_light_a_white_diffuser_with_their_stated_illuminances():
+    from nmmm.appearance.render import LambertianBRDF
+    from nmmm.appearance.render.cie_sky import cie_sun
+    from nmmm.appearance.render.plate.environment import _KM, _luminance_weight
+
+    w = np.arange(380.0, 781.0, 10.0)
+    sky = cie_sky_environment(w, 12, 30.0, 90.0, illuminance_lux=15000.0, height=64, width=128)
+    sun = cie_sun(w, 30.0, 90.0, 80000.0)
+    plate = PaintedPlate(LambertianBRDF(1.0), None, (150.0, 100.0))
+    cam = PinholeCamera((0.0, -100.0, 400.0), (0.0, 0.0, 0.0), fov_deg=20.0, resolution=(32, 24))
+    img = render_plate(plate, cam, lights=[sun], environment=sky, wavelength_nm=w)
+    lum = _KM * float(img.radiance[12, 16] @ _luminance_weight(w))
+    # a white diffuser: L = (E_sun sin(elevation) + E_sky) / π
+    assert lum == pytest.approx((80000.0 * 0.5 + 15000.0) / math.pi, rel=0.02)
+    assert sun.direction[1] > 0 and sun.direction[2] == pytest.approx(0.5)  # behind the plate, 30° high

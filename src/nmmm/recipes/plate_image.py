@@ -117,8 +117,8 @@ def _scene_of(recipe, w, size_mm):
     ``"point"`` is the recipe's point light (for a glass plate: the light table; for a thin film:
     the 45° booth, since a mirror-like plate shows only what it mirrors); ``"booth"`` /
     ``"booth-overhead"`` the grey viewing booth; ``"sky"`` the CIE standard general sky
-    ``sky_type`` (the sun behind the plate, at ``sky_sun_elevation_deg``; ground of
-    ``wall_reflectance``); ``"light-table"`` the 45° booth with a light table of
+    ``sky_type`` (the sun behind the plate, at ``sky_sun_elevation_deg``; its disc when ``sky_sun_lux`` > 0;
+    ground of ``wall_reflectance``); ``"light-table"`` the 45° booth with a light table of
     ``light_table_cd_m2`` (the first illuminant's spectrum) under the plate."""
     from nmmm.appearance.render import PointLight, ViewingBooth
 
@@ -130,9 +130,12 @@ def _scene_of(recipe, w, size_mm):
     if scene == "sky":
         from nmmm.appearance.render.cie_sky import cie_sky_environment
 
+        from nmmm.appearance.render.cie_sky import cie_sun
+
         env = cie_sky_environment(w, im.sky_type, im.sky_sun_elevation_deg, 90.0, im.sky_cct_k,
                                   im.sky_illuminance_lux, im.wall_reflectance)
-        return [], env, None, True
+        sun = [cie_sun(w, im.sky_sun_elevation_deg, 90.0, im.sky_sun_lux, im.sky_cct_k)] if im.sky_sun_lux > 0 else []
+        return sun, env, None, True
     if scene == "point":
         return [PointLight(tuple(np.asarray(im.light_position_cm, float) * 10.0), illum)], None, None, False
     booth = ViewingBooth(source="overhead" if scene == "booth-overhead" else "45", wall_reflectance=im.wall_reflectance,

@@ -12,8 +12,9 @@
   :class:`~nmmm.appearance.render.LatLongEnvironment` (z up, the plate frame; φ from +x towards
   +y), scaled so that the sky gives ``illuminance_lux`` on a horizontal plane; below the
   horizon a grey ground of reflectance ``ground_reflectance`` lit by that illuminance
-  (ρ E / π). The sun's disc itself is not in the map (give it as a
-  :class:`~nmmm.appearance.render.DirectionalLight`); its circumsolar aureole is.
+  (ρ E / π). The sun's disc itself is not in the map; its circumsolar aureole is.
+- :func:`cie_sun` — the sun's disc as a :class:`~nmmm.appearance.render.DirectionalLight` (0.53°,
+  the same daylight spectrum) giving a stated illuminance normal to its rays.
 
 References
 ----------
@@ -30,7 +31,7 @@ import numpy as np
 from nmmm.errors import InvalidInputError
 from nmmm.spectra import check_finite
 
-__all__ = ["CIE_SKY_TYPES", "cie_sky_relative_luminance", "cie_sky_environment"]
+__all__ = ["CIE_SKY_TYPES", "cie_sky_relative_luminance", "cie_sky_environment", "cie_sun"]
 
 _GRADATION = {"I": (4.0, -0.70), "II": (1.1, -0.8), "III": (0.0, -1.0), "IV": (-1.0, -0.55), "V": (-1.0, -0.32),
               "VI": (-1.0, -0.15)}
@@ -133,3 +134,29 @@ def cie_sky_environment(wavelength_nm, sky_type: int = 12, sun_elevation_deg: fl
     lum[~up] = rho * E / np.pi
     name = f"CIE sky type {int(sky_type)}, sun {el:g} deg, {'D65' if cct_k is None else f'{float(cct_k):g} K'}, {E:g} lx"
     return LatLongEnvironment(w, lum[..., None] * S[None, None, :], name=name)
+
+
+#: the sun's mean angular diameter, degrees
+SUN_ANGULAR_DIAMETER_DEG = 0.53
+
+
+def cie_sun(wavelength_nm, sun_elevation_deg: float = 45.0, sun_azimuth_deg: float = 90.0,
+            normal_illuminance_lux: float = 70000.0, cct_k=None):
+    """The sun of :func:`cie_sky_environment` as a :class:`~nmmm.appearance.render.DirectionalLight`
+    of angular diameter 0.53° and spectrum the same daylight, giving ``normal_illuminance_lux``
+    on a plane normal to its rays (a clear-sky sun gives about 60 000-100 000 lx)."""
+    from nmmm.appearance.render.lights import DirectionalLight, SpectralPowerDistribution
+    from nmmm.appearance.render.plate.environment import _luminance_weight
+
+    w = np.asarray(wavelength_nm, float).ravel()
+    el = float(check_finite(sun_elevation_deg, "sun_elevation_deg"))
+    if not 0 < el <= 90:
+        raise InvalidInputError(f"sun_elevation_deg must lie in (0, 90] for a sun that lights the plate, got {el!r}")
+    E = float(check_finite(normal_illuminance_lux, "sun normal_illuminance_lux"))
+    if E <= 0:
+        raise InvalidInputError(f"sun normal_illuminance_lux must be > 0, got {E!r}")
+    S = _daylight(w, cct_k)
+    S = S / (_KM * float(_luminance_weight(w) @ S))  # 1 lx of this spectrum
+    a, z = np.radians(float(check_finite(sun_azimuth_deg, "sun_azimuth_deg"))), np.radians(90.0 - el)
+    d = (float(np.sin(z) * np.cos(a)), float(np.sin(z) * np.sin(a)), float(np.cos(z)))
+    return DirectionalLight(d, SpectralPowerDistribution(w, S, name="CIE daylight sun"), E, SUN_ANGULAR_DIAMETER_DEG)
