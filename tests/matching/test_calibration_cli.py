@@ -70,3 +70,34 @@ def test_calibrate_refuses_a_ladder_it_cannot_use(tmp_path, capsys):
     rc = main(["calibrate", str(p2), "--fit", "k_scale,k_legendre_4", "-o", str(tmp_path / "o2")])
     assert rc == 2 and "fit must name some of" in capsys.readouterr().err
     assert not (tmp_path / "o1").exists() and not (tmp_path / "o2").exists()
+
+
+def test_a_ladder_file_with_a_misspelt_key_or_a_mismatched_geometry_is_not_silently_used(tmp_path, capsys):
+    """A ladder key nmmm does not know (``leftout``) would silently leave no sample out; a percent file
+    is refused with the ladder's way to say so; a recipe predicting another geometry than the file's
+    is said (it biased k_scale to 1.59 ± 0.07 here, true 1.25)."""
+    from nmmm.matching.cli import _ladder
+
+    text = LADDER.read_text(encoding="utf-8")
+    for bad, said in ((text.replace("left_out = true", "leftout = true"), "samples[4]: unknown key 'leftout' (did you mean 'left_out'?)"),
+                      (text.replace("fit = [", "fitt = ["), "unknown key 'fitt' (did you mean 'fit'?)"),
+                      (text.replace("left_out = true", 'left_out = "yes"'), "left_out = 'yes'; give true or false")):
+        p = _bad_ladder(tmp_path, "")
+        p.write_text(bad, encoding="utf-8")
+        rc = main(["calibrate", str(p), "-o", str(tmp_path / "o")])
+        assert rc == 2 and said in capsys.readouterr().err
+    cg = (LADDER.parent / "ladder.cgats").read_text(encoding="utf-8").splitlines()
+    begin, end = cg.index("BEGIN_DATA"), cg.index("END_DATA")
+    rows = [" ".join(r.split()[:2] + [f"{100 * float(v):.4f}" for v in r.split()[2:]]) for r in cg[begin + 1:end]]
+    (tmp_path / "ladder.cgats").write_text("\n".join([ln for ln in cg[:begin] if "SPECTRAL_NORM" not in ln] + ["BEGIN_DATA"]
+                                                     + rows + cg[end:]) + "\n", encoding="utf-8")
+    p.write_text(text, encoding="utf-8")
+    rc = main(["calibrate", str(p), "-o", str(tmp_path / "o")])
+    assert rc == 2 and 'in a ladder file: unit = "percent"' in capsys.readouterr().err
+    p.write_text(text.replace("\nunit", "\n#").replace('measured = "ladder.cgats"', 'measured = "ladder.cgats"\nunit = "percent"')
+                 .replace('set = { "pigments.0.fraction" = 0.01,', 'set = { "measurement.geometry" = "di:8", "pigments.0.fraction" = 0.01,'),
+                 encoding="utf-8")
+    spec, samples, left = _ladder(p)
+    err = capsys.readouterr().err
+    assert "warning: samples[3] ('1:9')" in err and "specular component included" in err and left == ("1:2",)
+    np.testing.assert_allclose(samples[0].reflectance.max(), 0.104859, atol=1e-6)  # percent read as such

@@ -115,32 +115,76 @@ def _ladder(path):
     from nmmm.recipes.run import _grid
     from nmmm.recipes.schema import parse_recipe, read_toml, set_key
 
+    import difflib
+
+    import click
+
+    from nmmm.errors import DataFileError
+    from nmmm.matching.measured_files import geometry_mismatch
+    from nmmm.recipes.paint_stack import geometry_of
+
     p = Path(path)
+    if not p.is_file():
+        raise DataFileError(f"ladder file {str(p)!r} not found (a TOML file: compound, measured, [[samples]]; "
+                            "e.g. examples/data/matching/ladder.toml in the nmmm source tree)")
     try:
         spec = tomllib.loads(p.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise InvalidInputError(f"{p.name}: not valid TOML ({exc})") from None
+    _check_keys(spec, _LADDER_KEYS, p.name, difflib)
     for key in ("compound", "measured", "samples"):
         if key not in spec:
             raise InvalidInputError(f"{p.name}: missing '{key}' (a ladder file names compound, measured and [[samples]])")
+    if isinstance(spec.get("fit"), str):  # fit = "k_scale, size_scale" as well as a list
+        spec["fit"] = [f.strip() for f in spec["fit"].split(",") if f.strip()]
     base = p.parent
-    measured = read_measured(base / spec["measured"], unit=spec.get("unit", "auto"), geometry=spec.get("geometry"))
-    samples, left = [], []
+    try:
+        measured = read_measured(base / spec["measured"], unit=spec.get("unit", "auto"), geometry=spec.get("geometry"))
+    except (InvalidInputError, DataFileError) as exc:
+        if "percent" not in str(exc):
+            raise
+        raise type(exc)(f"{exc} [in a ladder file: unit = \"percent\" (or \"fraction\") beside measured]") from None
+    samples, left, said = [], [], set()
     for i, s in enumerate(spec["samples"]):
+        _check_keys(s, _SAMPLE_KEYS, f"{p.name}: samples[{i}]", difflib)
         if "name" not in s or "recipe" not in s:
             raise InvalidInputError(f"{p.name}: samples[{i}] needs name and recipe")
+        if not isinstance(s.get("left_out", False), bool):
+            raise InvalidInputError(f"{p.name}: samples[{i}] ({s['name']!r}): left_out = {s['left_out']!r}; give true or false")
         raw, _, rbase = read_toml(base / s["recipe"])
         for k, v in s.get("set", {}).items():
             raw = set_key(raw, k, v)
         raw.setdefault("name", s["name"])
-        w = _grid(parse_recipe(raw, base_dir=rbase))
+        rec = parse_recipe(raw, base_dir=rbase)
+        w = _grid(rec)
         which = s.get("sample", s["name"])
         measured.spectrum(which)  # an unknown sample names the file's samples
         R = measured.on_grid(w)[measured.names.index(which)]
         samples.append(LadderSample(s["name"], raw, R, rbase))
         if s.get("left_out", False):
             left.append(s["name"])
+        differs = geometry_mismatch(measured.geometry, geometry_of(rec))
+        if differs and differs not in said:  # as nmmm match says it: a calibration would absorb the difference
+            said.add(differs)
+            click.echo(f"warning: samples[{i}] ({s['name']!r}): {differs}", err=True)
     return spec, samples, tuple(left)
+
+
+#: the keys of a ladder file and of its [[samples]] (anything else is refused, never ignored)
+_LADDER_KEYS = ("compound", "fit", "measured", "unit", "geometry", "samples")
+_SAMPLE_KEYS = ("name", "recipe", "set", "sample", "left_out")
+
+
+def _check_keys(table, known, where, difflib):
+    from nmmm.errors import InvalidInputError
+
+    if not isinstance(table, dict):
+        raise InvalidInputError(f"{where}: expected a table of keys {list(known)}")
+    for key in table:
+        if key not in known:
+            close = difflib.get_close_matches(key, known, n=1)
+            raise InvalidInputError(f"{where}: unknown key {key!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+                                    + f"; known keys: {', '.join(known)}")
 
 
 @click.command("calibrate")
@@ -155,9 +199,10 @@ def _ladder(path):
               help="Physical parameters to fit (default the ladder's 'fit', else k_scale,size_scale): k_scale, "
                    "k_legendre_1..3 (tilt, bow, S-shape of ln k), size_scale.")
 def calibrate(ladder, output, illuminant, mode="physical", fit_names=None):
-    """Calibrate a colourant on a measured LADDER (TOML: compound, fit, measured file, [[samples]] with
-    recipe, set, left_out): the physical mode writes the calibrated compound and a recipe using it;
-    the empirical mode K and S per unit concentration; both compares them sample by sample."""
+    """Calibrate a colourant on a measured LADDER (TOML: compound, fit, measured file, unit, geometry,
+    [[samples]] with name, recipe, set, sample, left_out; e.g. examples/data/matching/ladder.toml in
+    the source tree): the physical mode writes the calibrated compound and a recipe using it; the
+    empirical mode K and S per unit concentration; both compares them sample by sample."""
     import json
     from pathlib import Path
 
