@@ -40,6 +40,7 @@ def test_calibrate_both_modes_writes_the_comparison_and_a_runnable_calibrated_re
     # the calibrated recipe names the calibrated file and runs through the full model to the fitted masstone
     text = (out / "calibrated_recipe.toml").read_text(encoding="utf-8")
     assert 'file = "hematite_calibrated.csv"' in text
+    assert 'name = "masstone (ladder sample) \\u2014 hematite calibrated"' in text  # not the base recipe's "1:4" name
     calibrated = _Sample(LadderSample("masstone", out / "calibrated_recipe.toml", np.zeros(16)), "hematite")
     from nmmm.matching import read_cgats
 

@@ -314,7 +314,9 @@ def _calibrated_recipe(samples, compound, material_file, values) -> str:
     if sd is not None and raw.get("pigments"):
         raw["pigments"] = [dict(p, diameter_nm=p["diameter_nm"] * sd) if p.get("compound") == compound and "diameter_nm" in p
                            else p for p in raw["pigments"]]
-    raw["name"] = f"{raw.get('name', s.name)} — {compound} calibrated"
+    raw["name"] = f"{s.name} (ladder sample) — {compound} calibrated"  # not the base recipe's name: the ladder set its fractions
+    if raw.get("description"):
+        raw["description"] = f"The ladder's base recipe, before its set keys: {raw['description']}"
     head = (f"# {s.name!r} of the ladder with {compound} calibrated by nmmm calibrate (physical mode): optical constants "
             f"from {material_file}" + (f", diameters x {sd:.6g}" if sd is not None else "") + "\n")
     return head + _dump_toml(raw)
