@@ -114,3 +114,20 @@ def test_a_ladder_that_fixes_the_values_poorly_says_so(ladder):
     with pytest.warns(IdentifiabilityWarning, match="correlated"):
         res = calibrate_colourant(ladder[:1], "hematite", fit=("k_scale", "k_legendre_1", "size_scale"))
     assert any("k_scale and size_scale are correlated" in n for n in res.warnings), res.warnings
+
+
+def test_the_calibrated_compound_is_not_extrapolated_outside_the_window():
+    """Outside the ladder's grid nothing fixes k: calibrated_nk refuses it (asking for 300 nm as
+    well once moved n at 500 nm by 0.03); inside, a wavelength's value does not depend on the others."""
+    from nmmm.materials import Lorentz
+    from nmmm.matching.calibration import CalibrationResult
+
+    base = Lorentz(oscillators=[(6.0, 2.4, 0.5)], eps_inf=2.0, range_nm=(250, 2000))
+    res = CalibrationResult("x", {"k_scale": 1.25, "k_legendre_1": 0.2}, {}, {}, {}, (), 0, 0.0, window_nm=(400.0, 700.0),
+                            base_material=base)
+    with pytest.raises(InvalidInputError, match="outside the calibration window 400-700 nm"):
+        res.calibrated_nk([300.0, 500.0])
+    one = res.calibrated_nk([500.0])
+    np.testing.assert_allclose(res.calibrated_nk([400.0, 500.0, 700.0])[1], one[0], rtol=1e-12)
+    k0 = base.nk(np.array([500.0])).imag
+    np.testing.assert_allclose(one.imag, k0 * k_correction_factor([500.0], (400, 700), 1.25, (0.2,)), rtol=1e-12)

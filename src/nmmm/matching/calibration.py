@@ -86,10 +86,16 @@ class CalibrationResult:
         return _k_params(self.values)
 
     def calibrated_nk(self, wavelength_nm) -> np.ndarray:
-        """The calibrated compound's n + ik at ``wavelength_nm`` (inside the calibration window)."""
+        """The calibrated compound's n + ik at ``wavelength_nm`` (inside the calibration window: outside
+        it the ladder says nothing of k, and is an error)."""
         if self.base_material is None:
             raise InvalidInputError("this result carries no base compound; use .nk on .wavelength_nm")
         w = np.asarray(wavelength_nm, float)
+        lo, hi = self.window_nm
+        if w.size and (w.min() < lo * (1 - 1e-9) or w.max() > hi * (1 + 1e-9)):
+            raise InvalidInputError(f"wavelengths {w.min():g}-{w.max():g} nm reach outside the calibration window {lo:g}-{hi:g} nm "
+                                    "(the ladder's grid): the correction of k is fitted only there — ask inside it, or "
+                                    "calibrate on samples measured over the range you need")
         sk, coef = self.correction
         return corrected_material_nk(self.base_material, w, self.window_nm, sk, coef)
 

@@ -8,14 +8,17 @@
 - :func:`kk_delta_n` — Δn(λ) = (2/π) P∫ E'Δk(E')/(E'² − E²) dE', the index change that a change Δk
   of the absorption implies by causality (:func:`nmmm.materials.kramers_kronig.n_from_k`).
 - :func:`corrected_nk` — n + Δn + i·f·k: the corrected compound; n and k stay linked by
-  Kramers–Kronig (the change of n is the transform of the change of k; what the data cannot see,
-  absorption outside the window, is unchanged).
+  Kramers–Kronig (the change of n is the transform of the change of k over the grid given, held
+  at its end values 50 % beyond it; absorption farther out is unchanged).
 - :func:`corrected_material_nk` — the same for a Material, the KK integral taken on a fine grid
   (``step_nm``) of the material itself, so a coarse measurement grid and a finer file agree.
 
 The KK integral runs over the sampling grid extended by 50 % on each side with Δk held at its end
 values (a window wider than the data, so the transform is not truncated at the ends of the visible;
-the tails beyond are a modelling choice stated here, and their effect is smooth and small inside).
+the tails beyond are a modelling choice stated here, and their effect is smooth and small inside:
+for hematite on 400–700 nm, against the transform of f·k over the database's whole 210–5000 nm
+with f held beyond the window, Δn differs by 0.01–0.05 (largest Δn 0.18–0.46; three corrections), all but 0.0004–0.003
+of it a smooth background c0 + c_uv E² + c_ir/E², which the fitted size partly absorbs).
 
 References
 ----------
@@ -95,8 +98,9 @@ def corrected_nk(wavelength_nm, nk0, window_nm=None, k_scale: float = 1.0, coeff
 def corrected_material_nk(material, wavelength_nm, window_nm, k_scale: float = 1.0, coefficients=(),
                           step_nm: float = 5.0) -> np.ndarray:
     """:func:`corrected_nk` of ``material`` at ``wavelength_nm``, Δn computed from Δk sampled at
-    ``step_nm`` over the window and the requested wavelengths (then interpolated): the result at a
-    wavelength does not depend on which other wavelengths are asked for."""
+    ``step_nm`` over the window and the requested wavelengths (then interpolated): inside the window
+    the result at a wavelength does not depend on which other wavelengths are asked for, unless some
+    lie outside it (they extend the grid of the KK integral, and so change Δn everywhere)."""
     w = np.asarray(wavelength_nm, float)
     lo, hi = min(float(window_nm[0]), w.min()), max(float(window_nm[1]), w.max())
     fine = np.unique(np.concatenate([np.arange(lo, hi, float(step_nm)), [hi]]))
