@@ -17,8 +17,8 @@ The KK integral runs over the sampling grid extended by 50 % on each side with �
 values (a window wider than the data, so the transform is not truncated at the ends of the visible;
 the tails beyond are a modelling choice stated here, and their effect is smooth and small inside:
 for hematite on 400–700 nm, against the transform of f·k over the database's whole 210–5000 nm
-with f held beyond the window, Δn differs by 0.01–0.05 (largest Δn 0.18–0.46; three corrections), all but 0.0004–0.003
-of it a smooth background c0 + c_uv E² + c_ir/E², which the fitted size partly absorbs).
+with f held beyond the window, Δn differs by 0.01–0.05 (largest Δn 0.18–0.46; three corrections),
+all but 0.0004–0.003 of it a smooth background c0 + c_uv E² + c_ir/E²).
 
 References
 ----------
