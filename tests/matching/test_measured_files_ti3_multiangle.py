@@ -56,11 +56,26 @@ def test_argyll_ti3_spec_fields_read_as_percent(tmp_path):
     # a dark-only chart is still percent (the format's unit), not factors near 0.6
     dark = TI3.replace('NUMBER_OF_SETS 2', 'NUMBER_OF_SETS 1').replace(
         '1 "A1" 100.00 100.00 100.00 88.10 91.20 76.50 85.20 86.70 87.90\n', "")
-    assert read_cgats(_write(tmp_path, "dark.ti3", dark)).reflectance[0, 0] == pytest.approx(0.0061)
+    with pytest.warns(UserWarning, match=r"read as percent \(the CTI3 format's unit.*an almost black sample"):
+        assert read_cgats(_write(tmp_path, "dark.ti3", dark)).reflectance[0, 0] == pytest.approx(0.0061)
     # SPECTRAL_NORM, where a file states it, wins
     fac = TI3.replace("NUMBER_OF_FIELDS", 'KEYWORD "SPECTRAL_NORM"\nSPECTRAL_NORM "1"\nNUMBER_OF_FIELDS').replace(
         "85.20 86.70 87.90", "0.852 0.867 0.879").replace("0.61 0.58 0.55", "0.0061 0.0058 0.0055")
     assert read_cgats(_write(tmp_path, "fac.ti3", fac)).reflectance[0, 1] == pytest.approx(0.867)
+
+
+def test_ti3_holding_factors_is_said_not_silently_divided(tmp_path):
+    """A CTI3 file without SPECTRAL_NORM whose SPEC_ values are factors (0-1, written by another tool):
+    percent is the format's unit, so it is read as percent, but said (before: silently an almost black
+    sample, 100× too dark); unit='fraction' reads it as written."""
+    fac = TI3.replace("85.20 86.70 87.90", "0.852 0.867 0.879").replace("0.61 0.58 0.55", "0.0061 0.0058 0.0055")
+    p = _write(tmp_path, "factors.ti3", fac)
+    with pytest.warns(UserWarning, match=r"no value exceeds 1.5 \(the largest is 0.879 %\).*unit='fraction'"):
+        read_cgats(p)
+    np.testing.assert_allclose(read_cgats(p, unit="fraction").reflectance[0], [0.852, 0.867, 0.879])
+    declared = fac.replace("NUMBER_OF_FIELDS", 'KEYWORD "SPECTRAL_NORM"\nSPECTRAL_NORM "100.000000"\nNUMBER_OF_FIELDS')
+    with pytest.warns(UserWarning, match=r"read as percent \(SPECTRAL_NORM 100.000000\)"):
+        read_cgats(_write(tmp_path, "declared.ti3", declared))
 
 
 def test_ti3_header_disagreeing_with_its_fields_is_an_error(tmp_path):

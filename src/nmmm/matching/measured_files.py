@@ -106,16 +106,22 @@ class MeasuredSpectra:
         return colour.MultiSpectralDistributions(self.reflectance.T, self.wavelength_nm, labels=list(self.names))
 
 
-def _scaled(values: np.ndarray, unit: str, where: str, declared: bool = False) -> np.ndarray:
-    """Factors from ``values`` in ``unit``; ``declared``: the file itself states the unit (CGATS
-    SPECTRAL_NORM, Argyll's format), so percent data that are all dark are not a conflict."""
+def _scaled(values: np.ndarray, unit: str, where: str, declared: str | None = None) -> np.ndarray:
+    """Factors from ``values`` in ``unit``; ``declared``: how the file itself states the unit (CGATS
+    SPECTRAL_NORM, Argyll's format): percent data that are all dark are then read, with a warning."""
     if unit not in _UNITS:
         raise InvalidInputError(f"unit must be one of {_UNITS}, got {unit!r}")
     if not np.all(np.isfinite(values)):
         raise DataFileError(f"{where}: a spectral value is not a finite number")
     top = float(values.max()) if values.size else 0.0
     if unit == "percent":
-        if top <= PERCENT_THRESHOLD and not declared:
+        if top <= PERCENT_THRESHOLD and declared:  # said, not refused: a chart of dark samples is possible
+            import warnings
+
+            warnings.warn(f"{where}: read as percent ({declared}), but no value exceeds {PERCENT_THRESHOLD:g} (the "
+                          f"largest is {top:g} %): an almost black sample; if these are reflectance factors (0-1), "
+                          "read with unit='fraction' or fix the file", UserWarning, stacklevel=3)
+        elif top <= PERCENT_THRESHOLD:
             raise DataFileError(f"{where}: read as percent (unit='percent', CLI --percent), but no value exceeds "
                                 f"{PERCENT_THRESHOLD:g} (the largest is {top:g}): these are reflectance factors (0-1); "
                                 "dividing them by 100 would give an almost black sample — drop --percent")
@@ -206,15 +212,17 @@ def read_cgats(path, unit: str = "auto") -> MeasuredSpectra:
                             f"{norm} (reflectance factors, 0-1); drop --percent, or fix the keyword if the data are percent")
     first = next((ln for ln in lines if ln and not ln.startswith("#")), "")
     argyll = first.split()[0].upper() in ("CTI3", "CTI1", "CTI2") if first else False
+    said = None if declared is None else f"SPECTRAL_NORM {norm}"
     if argyll and declared is None and unit == "auto":
-        declared = "percent"  # Argyll writes its SPEC_<nm> fields in percent (0-100) by its format
+        declared, said = "percent", "the CTI3 format's unit, no SPECTRAL_NORM"  # Argyll's SPEC_<nm> are 0-100
     from_file = unit == "auto" and declared is not None
     if from_file:
         unit = declared
     order = np.argsort([w for _, w in spec])
     w = np.array([spec[i][1] for i in order])
     _check_spectral_bands(p.name, keywords, w)
-    R = _scaled(np.array(vals, float)[:, order] if vals else np.zeros((0, w.size)), unit, p.name, declared=from_file)
+    R = _scaled(np.array(vals, float)[:, order] if vals else np.zeros((0, w.size)), unit, p.name,
+                declared=said if from_file else None)
     if R.shape[0] == 0:
         raise DataFileError(f"{p.name}: the data block holds no samples")
     geo = keywords.get("MEASUREMENT_GEOMETRY") or keywords.get("GEOMETRY")
