@@ -6,6 +6,8 @@ Public API
   (``.tensor``, ``.iterations``, residual histories, local fields on request).
 - :func:`fft_permittivity_spectrum` — the same over a spectrum, chunks of wavelengths on a Dask
   cluster (local by default, or a scheduler address), warm starts along each chunk.
+- :func:`two_phase_spectrum` — a two-phase cell at every wavelength from one Lanczos run per
+  loading (Bergman's spectral representation: the wavelength is only a shift of the system).
 - :func:`homogenize` — Microstructure + {phase: Material} -> :class:`HomogenizedMaterial`
   (a :class:`nmmm.materials.material.DerivedMaterial`, possibly anisotropic).
 - :func:`extrapolate_resolution`, :func:`richardson` — first-order extrapolation to zero voxel size.
@@ -52,6 +54,7 @@ Known limitations
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
 from nmmm.homogenize.spectral_batches import fft_permittivity_spectrum
+from nmmm.homogenize.bergman_lanczos import two_phase_spectrum
 from nmmm.homogenize.material import HomogenizedMaterial, apparent_property, homogenize
 from nmmm.homogenize.resolution import ResolutionStudy, extrapolate_resolution, richardson
 from nmmm.homogenize.green import GREEN_OPERATORS, GreenOperator, green_operator
@@ -69,6 +72,7 @@ from nmmm.homogenize.validity import (
 __all__ = [
     "fft_permittivity",
     "fft_permittivity_spectrum",
+    "two_phase_spectrum",
     "FFTHomogenization",
     "homogenize",
     "HomogenizedMaterial",
