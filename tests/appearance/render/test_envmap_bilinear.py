@@ -141,3 +141,21 @@ def test_smooth_coat_environment_integral_on_sparser_nodes():
     m = ref > 1e-3 * ref.max()
     assert m.sum() > 0.5 * m.size
     assert (np.abs(got - ref)[m] / ref[m]).max() < 1e-3
+
+
+def test_booth_map_texels_average_their_directions():
+    """The booth map's texels are box means over supersample² directions (anti-aliased wall and
+    floor edges): equal to the 4×4 block means of a 4×-finer single-sample map, and the texels
+    across the floor-wall edge take intermediate values instead of jumping between two levels."""
+    from nmmm.appearance.render import ViewingBooth
+
+    w = np.array([550.0])
+    booth = ViewingBooth()
+    coarse = booth.environment(w, 32, 64, supersample=4).radiance[..., 0]
+    fine = booth.environment(w, 128, 256, supersample=1).radiance[..., 0]
+    np.testing.assert_allclose(coarse, fine.reshape(32, 4, 64, 4).mean(axis=(1, 3)), rtol=1e-12)
+    col = coarse[17:, 16]  # below the horizon (past its seam row), a column crossing the floor-wall edge
+    one = booth.environment(w, 32, 64, supersample=1).radiance[17:, 16, 0]
+    jump = np.argmax(np.diff(one))  # the floor-wall edge: the only rise down the column
+    lo, hi = sorted((one[jump], one[jump + 1]))
+    assert np.any((col > lo + 0.05 * (hi - lo)) & (col < hi - 0.05 * (hi - lo)))

@@ -215,18 +215,37 @@ class ViewingBooth:
         self.check_plate(plate)
         return dict(lights=self.lights(), environment=self.environment(wavelength_nm, height, width))
 
-    def environment(self, wavelength_nm, height: int = 128, width: int = 256):
-        """The booth's grey surfaces as a spectral lat-long map (see the class docstring)."""
+    def environment(self, wavelength_nm, height: int = 128, width: int = 256, supersample: int = 4):
+        """The booth's grey surfaces as a spectral lat-long map (see the class docstring). Each
+        texel is the mean over ``supersample`` × ``supersample`` directions spread over it, so
+        the edges where walls, floor and ceiling meet (where the direct irradiance jumps) are
+        anti-aliased instead of printed as a staircase of whole texels."""
         from nmmm.appearance.render.lights import LatLongEnvironment
 
         w = np.asarray(wavelength_nm, float).ravel()
         light = self.lights()[0]
         I = light.spectral(w)  # (L,) W/sr/nm per unit
         W, D, H = self.size_mm
-        th = (np.arange(height) + 0.5) / height * np.pi
-        ph = (np.arange(width) + 0.5) / width * 2 * np.pi
-        T, P = np.meshgrid(th, ph, indexing="ij")
-        d = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
+        ss = int(supersample)
+        if ss < 1:
+            raise InvalidInputError(f"booth environment supersample must be >= 1, got {supersample!r}")
+        sub = (np.arange(ss) + 0.5) / ss
+        ph = ((np.arange(width)[:, None] + sub[None, :]).ravel()) / width * 2 * np.pi
+        factor = np.empty((height, width))
+        rows_per = max(1, 65536 // (width * ss * ss))
+        for i0 in range(0, height, rows_per):
+            i1 = min(height, i0 + rows_per)
+            th = ((np.arange(i0, i1)[:, None] + sub[None, :]).ravel()) / height * np.pi
+            T, P = np.meshgrid(th, ph, indexing="ij")
+            d = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
+            f = self._radiance_factor(d)
+            factor[i0:i1] = f.reshape(i1 - i0, ss, width, ss).mean(axis=(1, 3))
+        L = factor[..., None] * I[None, None, :]
+        return LatLongEnvironment(w, L, name=f"viewing booth ({W:g} x {D:g} x {H:g} mm, walls {self.wall_reflectance:g})")
+
+    def _radiance_factor(self, d):
+        """ρ/π (E_direct + E_inter) per unit source intensity along unit directions d (..., 3)."""
+        W, D, H = self.size_mm
         origin = np.where(d[..., 2:3] < 0, np.array([0.0, 0.0, H / 2]), 0.0)
         lo, hi = np.array([-W / 2, -D / 2, 0.0]), np.array([W / 2, D / 2, H])
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -249,5 +268,4 @@ class ViewingBooth:
         rho_mean = (W * D * self.floor_reflectance + (W * D + 2 * W * H + 2 * D * H) * self.wall_reflectance) \
             / (2 * (W * D + W * H + D * H))
         e_inter = rho_mean * 4 * np.pi / (area * (1 - rho_mean))
-        L = (rho / np.pi * (e_direct + e_inter))[..., None] * I[None, None, :]
-        return LatLongEnvironment(w, L, name=f"viewing booth ({W:g} x {D:g} x {H:g} mm, walls {self.wall_reflectance:g})")
+        return rho / np.pi * (e_direct + e_inter)
