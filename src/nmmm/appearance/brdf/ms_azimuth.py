@@ -89,7 +89,7 @@ def double(R, T, n_doublings):
 def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int = 16):
     """c_m(θi, θo) on the external albedo grid (2° steps): ``(NA, NA, n_modes)``; one shape for
     all wavelengths: Σ_λ M_m / Σ_λ M_0 (the flakes' spectral contrast hardly moves it)."""
-    L, n = tab.L, tab.n
+    n = tab.n
     th, mu, sn, dmu = gauss_nodes(n_mu)
     G = flake_kernels(tab, mu, sn, dmu, n_modes, lossless=False)[:, :, 0]  # (M+1, up/down, j, k, L)
     eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu  # (k,) extinction per unit τ, × τ_e/τ
