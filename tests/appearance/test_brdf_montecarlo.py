@@ -61,6 +61,14 @@ side. Bin averages at θi = 45° (θo 60–80°, |φo| 0–60° / 60–120° / 1
 0.172 / 0.065 / 0.043 (−13 %, +14 %, +86 %), with 0.198 / 0.058 / 0.024. The comparison
 of every bin (``test_binned_brdf_matches_mc``, 4 SE + 10 %) was ``xfail(strict=True)``
 and now passes.
+
+Issue 18: ``trace_coat`` extends the tracer to a pigmented basecoat (pigment absorption
+κa(λ) as a weight along every flight, grey Henyey–Greenstein scattering κs, g; flakes in a
+depth band) and to finite flakes (GGX-rough faces: a facet drawn around each flake normal by
+an exact 3-D rotation; rims scattering isotropically with probability f_e). Against
+``PaintBRDF(..., medium=CoatMedium(...))`` (6·10^4 photons, 0/45/70°, 450/550/650 nm): albedo
+within 0.006 for the pigment cases and 0.005 for the finite-flake cases, every bin at 45°
+within 9 % (mostly ≤ 5 %), asserted 4 SE + 0.01 and 4 SE + 10 % as above.
 """
 
 import numpy as np
