@@ -554,10 +554,11 @@ class FlakeLayer:
 
 def edge_scatter_fraction(mean_diameter_nm: float, edge_width_nm: float = 500.0) -> float:
     """Fraction of the light meeting a flake that its rim scatters diffusely: the rim is a
-    band of width w (wavelength scale, ragged "cornflake" edges: ~0.5 µm) round a disc of
-    diameter d, perimeter/area = 4/d, so f = 4 w / d (capped at 0.5). Silver-dollar flakes
-    (smooth, rounded rims) scatter less than cornflakes of the same size (Maile, Pfaff &
-    Reynders 2005; Pfaff, *Special Effect Pigments*, 2008)."""
+    band of width w round a disc of diameter d, perimeter/area = 4/d, so f = 4 w / d (capped
+    at 0.5). The default w = 500 nm is an assumed wavelength-scale width, not a measured one:
+    give a smaller w for smooth "silver-dollar" rims and a larger one for ragged "cornflake"
+    rims (which scatter more; Maile, Pfaff & Reynders 2005, and Pfaff, *Special Effect
+    Pigments*, 2008, describe the difference qualitatively)."""
     d = float(check_finite(mean_diameter_nm, "mean_diameter_nm"))
     w = float(check_finite(edge_width_nm, "edge_width_nm"))
     if not d > 0 or w < 0:
