@@ -21,3 +21,4 @@ def test_calibration_demo(tmp_path):
     left = rows["1:2 (left out)"]
     assert left["role"] == "left out" and left["ΔE00 physical"] <= 1.0 and "ΔE00 empirical (K/S)" in left
     assert "not in the ladder) was never fitted" in r["text"][1]
+    assert any("The empirical fit warns" in t and "contrast pair" in t for t in r["text"])  # its 60 µm films all hide

@@ -174,3 +174,44 @@ def test_the_surface_correction_follows_the_geometry_of_the_ladder():
     K, S, rms = fit_km_constants(c[:7], X[:7], Rg[:7], R[:7], K1, K2, exit_factor=ex)
     np.testing.assert_allclose(S, S_TRUE, rtol=1e-4)
     np.testing.assert_allclose(K[0], K_TRUE[0], rtol=1e-4)
+
+
+def test_a_ladder_without_a_contrast_pair_that_shows_through_says_so():
+    """K and S of films that hide are fixed as a ratio, not in scale: measured with noise 0.002, films
+    over white only (or a pair over white and black that hides) give K, S many times off where no pair
+    shows contrast, and within a few % where a thin pair differs by 0.02 or more — and the calibration
+    says where (IdentifiabilityWarning), from the measured spectra, not from its own fit."""
+    from nmmm.matching.empirical_km import CONTRAST, _identifiability
+    from nmmm.matching.recipe_match import IdentifiabilityWarning
+
+    def films(spec):
+        c, X, Rg = np.array([f[0] for f in spec]), np.array([f[1] for f in spec]), np.array([f[2] for f in spec])
+        Km, Sm = c @ K_TRUE, c @ S_TRUE
+        return c, X, Rg, saunderson_sce(np.where(Rg[:, None] == 0, r_over_black(Km, Sm, X[:, None]),
+                                                 r_over(Km, Sm, X[:, None], Rg[:, None])), K1, K2)
+
+    over_white = [((0.05, 0.0), 60.0, 0.8), ((0.0, 0.12), 60.0, 0.8), ((0.04, 0.04), 60.0, 0.8), ((0.02, 0.08), 60.0, 0.8),
+                  ((0.01, 0.09), 60.0, 0.8)]
+    w = np.array([400.0, 450.0, 500.0, 550.0, 600.0])
+    cases = {"no pair": (over_white, "no two fitted films share a recipe"),
+             "a pair that hides": (over_white + [((0.02, 0.08), 60.0, 0.0)], "differ by at most 0.01"),
+             "a thin pair": (over_white + [((0.01, 0.09), 5.0, 0.8), ((0.01, 0.09), 5.0, 0.0)], "at 2 of 5 wavelengths (400-450 nm)")}
+    for name, (spec, said) in cases.items():
+        c, X, Rg, R = films(spec)
+        with pytest.warns(IdentifiabilityWarning, match=r"ratio far better than in scale") as rec:
+            notes = _identifiability(c, X, Rg, R, w, ("red", "white"))
+        assert len(notes) == 1 and said in notes[0] and len(rec) == 1, (name, notes)
+    contrast = np.abs(R[-1] - R[-2])
+    assert np.all(contrast[:2] <= CONTRAST) and np.all(contrast[2:] >= 0.02)
+    errors = []
+    for seed in (1, 2, 3):
+        noisy = R + np.random.default_rng(seed).normal(0, 0.002, R.shape)
+        K, S, _ = fit_km_constants(c, X, Rg, noisy, K1, K2)
+        errors.append(np.abs(np.log(S / S_TRUE)).max(axis=0))
+    errors = np.array(errors)
+    assert np.all(errors[:, 2:] < np.log(1.10)) and errors[:, :2].max() > np.log(5), errors
+    # as many films as unknowns: said as well
+    c, X, Rg, R = films(over_white[:4])
+    with pytest.warns(IdentifiabilityWarning):
+        notes = _identifiability(c, X, Rg, R, w, ("red", "white"))
+    assert "4 fitted films for 4 unknowns" in notes[0]

@@ -223,9 +223,14 @@ def calibrate(ladder, output, illuminant, mode="physical", fit_names=None):
             warnings.simplefilter("ignore", IdentifiabilityWarning)
             res = calibrate_colourant(samples, compound, fit=fit, left_out=left, illuminant=illuminant)
     if mode in ("empirical", "both"):
-        from nmmm.matching.empirical_km import calibrate_empirical
+        import warnings
 
-        emp = calibrate_empirical(samples, left_out=left, illuminant=illuminant)
+        from nmmm.matching.empirical_km import calibrate_empirical
+        from nmmm.matching.recipe_match import IdentifiabilityWarning
+
+        with warnings.catch_warnings():  # said on stdout and in report.md, not twice
+            warnings.simplefilter("ignore", IdentifiabilityWarning)
+            emp = calibrate_empirical(samples, left_out=left, illuminant=illuminant)
     out = Path(output) if output else Path(f"calibrate-{Path(ladder).stem}")
     rows = _comparison_rows(samples, left, res, emp)
     with atomic_output_dir(out) as tmp:
@@ -246,13 +251,15 @@ def calibrate(ladder, output, illuminant, mode="physical", fit_names=None):
             _write_rows(tmp / "km_constants.csv", emp.table())
             info.update(colourants=list(emp.colourants), saunderson="k1 Fresnel at normal incidence, k2 internal diffuse "
                         "(Judd 1942), from the binder's index", k1_mean=float(emp.k1.mean()), k2_mean=float(emp.k2.mean()),
-                        specular=emp.specular, time_s_empirical=emp.time_s)
+                        specular=emp.specular, time_s_empirical=emp.time_s, warnings_empirical=emp.warnings)
         (tmp / "calibration.json").write_text(json.dumps(info, indent=1), encoding="utf-8")
         (tmp / "report.md").write_text(_calibration_report(ladder, compound, rows, res, emp, fit, illuminant), encoding="utf-8")
     if res is not None:
         click.echo("  ".join(f"{k} = {v:.4f} ± {res.standard_errors[k]:.4f}" for k, v in res.values.items()))
         for note in res.warnings:
             click.echo(f"warning: {note}")
+    for note in emp.warnings if emp is not None else ():
+        click.echo(f"warning (empirical): {note}")
     for r in rows:
         click.echo(f"{r['sample']}{' (left out)' if r['role'] == 'left out' else ''}: dE00 "
                    + "; ".join(f"{k.split('_')[1]} {r[k]}" for k in r if k.startswith("dE00_")))
@@ -340,7 +347,7 @@ def _calibration_report(ladder, compound, rows, res, emp, fit, illuminant) -> st
                   f"Two-constant Kubelka-Munk K, S per unit volume fraction of {', '.join(emp.colourants)} (Duncan mixing), "
                   f"Saunderson k1 {emp.k1.min():.3f}-{emp.k1.max():.3f} (Fresnel, binder index), k2 {emp.k2.min():.3f}-"
                   f"{emp.k2.max():.3f} (internal diffuse, Judd 1942), specular {emp.specular}; constants in km_constants.csv.",
-                  ""]
+                  ""] + [f"**Warning:** {n}" for n in emp.warnings] + ([""] if emp.warnings else [])
     keys = list(rows[0])
     lines += [f"## ΔE00 per sample ({illuminant}; left-out samples are predictions)", "",
               "| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]

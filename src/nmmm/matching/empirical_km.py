@@ -195,6 +195,7 @@ class EmpiricalCalibration:
     illuminant: str = "D65"
     exit_factor: np.ndarray | None = None  # (1 − R_F(45°))/n² at 0:45a / 45a:0; None: 1 − k2
     geometry: str = "de:8"
+    warnings: list = field(default_factory=list)  # what the ladder fixes poorly (also issued as IdentifiabilityWarning)
 
     def reflectance(self, concentrations: dict, thickness_um: float, substrate_reflectance) -> np.ndarray:
         """The predicted spectrum of a film of ``concentrations`` (compound → volume fraction)."""
@@ -294,6 +295,47 @@ def _surface_terms(geometry: str, n_binder) -> tuple[str, np.ndarray | None]:
     return "excluded", np.asarray((1 - r45) / n**2, float)
 
 
+def _identifiability(c, X, Rg, R, wavelength_nm, colourants) -> list[str]:
+    """What a ladder of fitted films (``c`` (n, m), ``X``, ``Rg``, measured ``R`` (n, n_λ)) fixes poorly,
+    each also issued as an IdentifiabilityWarning: as many films as unknowns (the fit can follow every
+    measurement, noise included), and wavelengths where no contrast pair — two films of one recipe over
+    different substrates or at different thicknesses — differs by more than :data:`CONTRAST` in measured
+    reflectance: there K and S are fixed as a ratio far better than in scale (module docstring; in
+    tests/matching/test_calibration_empirical.py, up to 50 times off with noise 0.002 where a pair hides,
+    within 10 % where it differs by 0.02 or more)."""
+    import warnings
+
+    from nmmm.matching.recipe_match import IdentifiabilityWarning
+
+    n, m = c.shape
+    notes = []
+    if n == 2 * m:
+        notes.append(f"{n} fitted films for {2 * m} unknowns per wavelength (K and S of {', '.join(colourants)}): the fit "
+                     "can follow every measurement, its noise included, so its ΔE00 on the fitted films checks little "
+                     "— measure more films or leave fewer out")
+    pairs = [(i, j) for i in range(n) for j in range(i + 1, n) if np.allclose(c[i], c[j], rtol=1e-9, atol=1e-12)
+             and (abs(Rg[i] - Rg[j]) > 0.05 or abs(X[i] - X[j]) > 0.1 * X[i])]
+    contrast = np.max([np.abs(R[i] - R[j]) for i, j in pairs], axis=0) if pairs else np.zeros(R.shape[1])
+    poor = contrast <= CONTRAST
+    if poor.any():
+        where = ("at every wavelength" if poor.all() else
+                 f"at {poor.sum()} of {poor.size} wavelengths ({wavelength_nm[poor].min():g}-{wavelength_nm[poor].max():g} nm)")
+        what = ("no two fitted films share a recipe over different substrates or at different thicknesses" if not pairs else
+                f"the fitted films of one recipe over different substrates or at different thicknesses differ by at most "
+                f"{CONTRAST:g} in reflectance (they hide)")
+        notes.append(f"{where}, {what}: K and S are fixed there as a ratio far better than in scale, so the constants "
+                     "(km_constants.csv) may be far off for films of another thickness or hiding — add a film that does "
+                     "not hide, over black and over white (a contrast pair)")
+    for note in notes:
+        warnings.warn(note, IdentifiabilityWarning, stacklevel=3)
+    return notes
+
+
+#: a contrast pair fixes the scale of K and S where its two measured reflectances differ by more than this
+#: (5 times a spectrophotometer's typical repeatability, 0.002)
+CONTRAST = 0.01
+
+
 def calibrate_empirical(samples, left_out=(), illuminant: str = "D65") -> EmpiricalCalibration:
     """K, S per unit concentration of every colourant of the ladder ``samples`` (LadderSample,
     as for :func:`~nmmm.matching.calibration.calibrate_colourant`), fitted on all but ``left_out``."""
@@ -328,6 +370,7 @@ def calibrate_empirical(samples, left_out=(), illuminant: str = "D65") -> Empiri
     K, S, rms = fit_km_constants(c[fitted], X[fitted], Rg[fitted], R[fitted], k1, k2, specular, exit_factor)
     cal = EmpiricalCalibration(colourants, w, K, S, k1, k2, specular, {}, tuple(left_out), rms=rms, illuminant=illuminant,
                                exit_factor=exit_factor, geometry=geometry)
+    cal.warnings = _identifiability(c[fitted], X[fitted], Rg[fitted], R[fitted], w, colourants)
     for i, name in enumerate(names):
         pred = cal.reflectance(dict(zip(colourants, c[i])), X[i], Rg[i])
         cal.predicted[name] = pred
