@@ -21,6 +21,8 @@ References
 - CIE S 011/E:2003 (ISO 15469:2004), *Spatial distribution of daylight — CIE standard general sky*.
 - R. Kittler, S. Darula, R. Perez, "A set of standard skies characterizing daylight conditions
   for computer and energy conscious design", Report ICA 3/95, Bratislava (1998).
+- S. Darula, R. Kittler, "CIE general sky standard defining luminance distributions", Proc. eSim 2002,
+  Montreal, 11-13 (the same a-e groups and type assignments; checked entry by entry).
 - P. Moon, D. E. Spencer, "Illumination from a non-uniform sky", Illum. Eng. 37 (1942) 707.
 """
 
