@@ -77,7 +77,9 @@ def write_match_outputs(res, out_dir, target_name: str = "target", plots: bool =
         summary = dict(values=res.values, dE00=res.de00, dL_dC_dH=[float(v) for v in res.dlch], illuminant=res.illuminant,
                        metamerism_index=res.metamerism, spectral_rms=res.spectral_rms, target_lab=[float(v) for v in res.target_lab],
                        lab=[float(v) for v in res.lab], mode=res.mode, model_evaluations=res.evaluations, time_s=res.time_s,
-                       standard_errors=res.standard_errors, active_bounds=res.active_bounds, warnings=res.warnings,
+                       standard_errors=res.standard_errors, noise=res.noise,
+                       shares={k: dict(share=v, sigma=e) for k, (v, e) in res.shares.items()}, total=res.total,
+                       active_bounds=res.active_bounds, warnings=res.warnings,
                        adding_doubling_nodes=res.quad_pts)
         if difference is not None:
             summary["difference"] = difference
@@ -89,9 +91,17 @@ def write_match_outputs(res, out_dir, target_name: str = "target", plots: bool =
               + (", ".join(f"{k} {v:.3f}" for k, v in res.metamerism.items()) or "— (CIELAB target)"),
               *_difference_lines(difference),
               f"- spectral RMS: {res.spectral_rms:.5f}" if np.isfinite(res.spectral_rms) else "- spectral RMS: — (CIELAB target)",
-              f"- model evaluations: {res.evaluations}; {res.time_s:.1f} s", "", "| key | value | σ (noise 0.002) |",
-              "|---|---|---|"]
-        md += [f"| {k} | {v:.6g} | {res.standard_errors.get(k, float('nan')):.3g} |" for k, v in res.values.items()]
+              f"- model evaluations: {res.evaluations}; {res.time_s:.1f} s", "",
+              f"| key | value | σ linearised (noise {res.noise:g}) |" + (" share of the total ± σ |" if res.shares else ""),
+              "|---|---|---|" + ("---|" if res.shares else "")]
+        md += [f"| {k} | {v:.6g} | {res.standard_errors.get(k, float('nan')):.3g} |"
+               + ((" {:.4g} ± {:.2g} |".format(*res.shares[k]) if k in res.shares else " — |") if res.shares else "")
+               for k, v in res.values.items()]
+        if res.total:
+            t = res.total
+            md += ["", f"Total of the matched fractions {t['total']:.4g}: 68 % profile interval {t['low']:.4g}–{t['high']:.4g}"
+                   + (" (an end at the --vary bounds: the spectrum does not pin it there)"
+                      if t["low_at_bound"] or t["high_at_bound"] else "") + "."]
         if res.active_bounds:
             md += ["", f"Bounds reached: {', '.join(res.active_bounds)}."]
         md += [""] + [f"**Warning:** {w}" for w in res.warnings]
