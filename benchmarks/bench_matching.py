@@ -10,11 +10,12 @@ What is timed, per mode (colorimetric: ΔE00 residual + 0.1 × spectral residual
 - nmmm: one :func:`nmmm.matching.match_recipe` call as a user makes it — Kubelka–Munk fits from two
   starts (cheap: the Mie optics of each colourant once, then KM algebra), the quasi-Newton finish on
   adding–doubling started from the KM Jacobian, the final spectrum, the standard errors (n more
-  adding–doubling evaluations) and the metamerism indices.
+  adding–doubling evaluations), the shares and the total's profile interval (8 more) and the
+  metamerism indices.
 - plain: ``scipy.optimize.least_squares`` (trf, default tolerances and step) on the same residual and
   the same forward model called directly with adding–doubling (the automatic quadrature rule at every
-  call, as ``nmmm run`` computes), no KM start, from the middle of the same bounds, then one final
-  spectrum. Its evaluation count moves with rounding (41–81 seen for the same case: the default
+  call, as ``nmmm run`` computes; CIELAB by the same once-computed E308 weights as nmmm's residual),
+  no KM start, from the middle of the same bounds, then one final spectrum. Its evaluation count moves with rounding (41–81 seen for the same case: the default
   finite-difference step is 1.5e-8).
 - plain-stopped: the same, stopped at the same residual norm as nmmm (1e-5: ΔE00 or % RMS), as a
   user who knows when to stop would write it.
@@ -100,17 +101,19 @@ def run_plain(m, target, mode: str = "colorimetric", stop_norm: float | None = N
 
     from nmmm.colour import delta_e2000, spectra_to_lab
     from nmmm.matching.metamerism import delta_e2000_residuals
+    from nmmm.matching.recipe_match import _lab_function
 
     w = m.wavelength_nm
     lo = np.array([b.lo for b in m.bounds])
     hi = np.array([b.hi for b in m.bounds])
     lab_t = spectra_to_lab(w, target, "D65")
+    lab_of = _lab_function(w, "D65", "2")  # the CIELAB weights once, as nmmm's residual has them
 
     def residuals(x):
         R = m.reflectance(x, "ad", None)
         if mode == "spectral":
             return (R - target) * 100 / np.sqrt(w.size)
-        lab = spectra_to_lab(w, np.clip(R, 0, None), "D65")
+        lab = lab_of(R)
         return np.concatenate([delta_e2000_residuals(lab_t, lab), 0.1 * (R - target) * 100 / np.sqrt(w.size)])
 
     class _Stop(Exception):
