@@ -16,6 +16,7 @@ Usage::
     python benchmarks/bench_fft_metals.py --spectrum 64         # aluminium (Rakić), 81 λ, warm starts
     python benchmarks/bench_fft_metals.py --spectrum 64 --scheduler local   # the same on 2 Dask workers
     python benchmarks/bench_fft_metals.py --speedup 64 --n-wavelengths 16   # 1 process vs 2 Dask workers
+    python benchmarks/bench_fft_metals.py --spectrum 128 --lanczos --spectrum-loadings 0   # one Lanczos run
 
 Cells: Boolean spheres p = 0.2, radius 5 voxels at 64³ (scaled with the grid); hard-core (RSA)
 spheres p = 0.2, same radius; flakes: discs of radius n/6, 2 voxels thick, lying flat, ~10 %.
@@ -117,25 +118,33 @@ def table(cases, grids, metals, compare: bool, maxiter: int):
                           flush=True)
 
 
-def spectrum(n: int, directions, scheduler=None, nwl: int = 81, workers: int = 2):
-    from nmmm.homogenize import fft_permittivity_spectrum
+def spectrum(n: int, directions, scheduler=None, nwl: int = 81, workers: int = 2, lanczos: bool = False):
+    from nmmm.homogenize import fft_permittivity_spectrum, two_phase_spectrum
 
     w, eps_al = aluminium(nwl)
     lab = flakes(n)
     where = "one process" if not scheduler else ("LocalCluster" if scheduler == "local" else scheduler)
+    if lanczos:
+        where = "one Lanczos run per loading (two_phase_spectrum, complex128 fields)"
     print(f"\n## Aluminium (Rakić) flakes {n}³ ({lab.mean():.3f}), {nwl} wavelengths 380-780 nm, "
           f"complex64, tol 1e-5, warm starts, loadings {directions}, {where}")
     kw = dict(dtype="complex64", tol=1e-5, directions=directions, max_minutes=float("inf"))
     t = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        if scheduler:
+        if lanczos:
+            r = two_phase_spectrum(lab, {0: HOST, 1: eps_al}, tol=1e-5, directions=directions)
+        elif scheduler:
             r = fft_permittivity_spectrum(lab, {0: HOST, 1: eps_al}, n_workers=workers,
                                           scheduler=None if scheduler == "local" else scheduler, **kw)
         else:
             r = fft_permittivity(lab, {0: HOST, 1: eps_al}, progress=False, **kw)
     wall = time.perf_counter() - t
     its = np.asarray(r.iterations)
+    if lanczos:  # steps at which each wavelength converged; the run costs the largest per loading
+        its = np.asarray(r.metadata["projections"])
+        print(f"  Lanczos steps at which the wavelengths converged: min {np.min(r.iterations)}, "
+              f"max {np.max(r.iterations)}")
     print(f"  total {wall:.1f} s, operator {r.green}, switches: {describe_switches(r)}")
     print(f"  projections per solve: min {its.min()}, median {int(np.median(its))}, max {its.max()}, "
           f"total {its.sum()}; {wall / its.sum() * 1e3:.1f} ms per projection")
@@ -197,6 +206,7 @@ def main(argv=None):
     ap.add_argument("--n-wavelengths", type=int, default=81)
     ap.add_argument("--scheduler", help="'local' (LocalCluster) or tcp://HOST:8786: spread --spectrum over Dask")
     ap.add_argument("--dask-workers", type=int, default=2)
+    ap.add_argument("--lanczos", action="store_true", help="--spectrum by two_phase_spectrum (one run per loading)")
     ap.add_argument("--speedup", type=int, metavar="N", help="1 process vs --dask-workers Dask workers at N³")
     args = ap.parse_args(argv)
     print(f"# FFT homogenization of metal-dielectric cells (load average {os.getloadavg()[0]:.1f}, "
@@ -204,7 +214,8 @@ def main(argv=None):
     if args.speedup:
         speedup(args.speedup, args.n_wavelengths, args.spectrum_loadings, args.dask_workers)
     elif args.spectrum:
-        spectrum(args.spectrum, args.spectrum_loadings, args.scheduler, args.n_wavelengths, args.dask_workers)
+        spectrum(args.spectrum, args.spectrum_loadings, args.scheduler, args.n_wavelengths, args.dask_workers,
+                 args.lanczos)
     else:
         table(args.cases, args.grids, args.eps, args.compare, args.maxiter)
 
