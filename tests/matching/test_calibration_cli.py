@@ -84,7 +84,8 @@ def test_a_ladder_file_with_a_misspelt_key_or_a_mismatched_geometry_is_not_silen
     text = LADDER.read_text(encoding="utf-8")
     for bad, said in ((text.replace("left_out = true", "leftout = true"), "samples[4]: unknown key 'leftout' (did you mean 'left_out'?)"),
                       (text.replace("fit = [", "fitt = ["), "unknown key 'fitt' (did you mean 'fit'?)"),
-                      (text.replace("left_out = true", 'left_out = "yes"'), "left_out = 'yes'; give true or false")):
+                      (text.replace("left_out = true", 'left_out = "yes"'), "left_out = 'yes'; give true or false"),
+                      (text.replace('name = "1:9"', 'name = "1:8"'), "samples[3] ('1:8') in ladder.cgats: no sample '1:8'")):
         p = _bad_ladder(tmp_path, "")
         p.write_text(bad, encoding="utf-8")
         rc = main(["calibrate", str(p), "-o", str(tmp_path / "o")])

@@ -158,7 +158,11 @@ def _ladder(path):
         rec = parse_recipe(raw, base_dir=rbase)
         w = _grid(rec)
         which = s.get("sample", s["name"])
-        measured.spectrum(which)  # an unknown sample names the file's samples
+        try:
+            measured.spectrum(which)  # an unknown sample names the file's samples
+        except (InvalidInputError, DataFileError) as exc:
+            raise type(exc)(f"{p.name}: samples[{i}] ({s['name']!r}) in {spec['measured']}: {exc} — name it as the file does, "
+                            "or add sample = \"<its name in the file>\"") from None
         R = measured.on_grid(w)[measured.names.index(which)]
         samples.append(LadderSample(s["name"], raw, R, rbase))
         if s.get("left_out", False):
