@@ -99,3 +99,35 @@ def test_km_start_and_centre_start_reach_the_same_match():
             assert res.de00 < 0.01
             np.testing.assert_allclose([res.values[b.key] for b in m.bounds], true, rtol=0.01)
             assert ("km" in m.evaluations and m.evaluations["km"] > 0) == km
+
+
+def test_quasi_newton_says_when_its_cap_ended_it():
+    """report['capped']: True when the evaluation cap, not convergence, ended the fit (then match_recipe
+    warns instead of reporting the point as the match); False at a converged or bound minimum."""
+    t = np.linspace(0, 3, 25)
+
+    def fun(u):
+        return (0.5 + u[0]) * np.exp(-(0.2 + 2 * u[1]) * t) + u[2] - (0.8 * np.exp(-1.6 * t) + 0.2)
+
+    for cap, capped in ((4, True), (None, False)):
+        how = {}
+        _quasi_newton(fun, np.array([0.6, 0.3, 0.5]), None, stop_norm=1e-10, max_evals=cap, report=how)
+        assert how["capped"] is capped
+    how = {}
+    _quasi_newton(lambda u: np.array([u[0] - 1.5, 0.1 * (u[1] - 0.4)]), np.array([0.2, 0.9]), None, 1e-12, report=how)
+    assert how["capped"] is False
+
+
+def test_match_stopped_by_the_cap_is_warned(monkeypatch):
+    """A finish the cap ended above ΔE00 0.3 (refine_above_de00) is warned, not reported as the match
+    silently (a noisy colorimetric target's finish also meets the cap, at ΔE00 ~0.0005: not warned)."""
+    import nmmm.matching.recipe_match as rm
+    from nmmm.matching import RecipeModel, match_recipe
+    from nmmm.recipes.schema import example_path
+
+    m = RecipeModel(example_path("hematite_tint"), ["pigments.0.fraction=0.005:0.08", "pigments.1.fraction=0.02:0.25"])
+    target = m.reflectance(np.array([0.021, 0.15]), "ad")
+    monkeypatch.setattr(rm, "_FINISH_MAX_EVALS", 2)
+    with pytest.warns(UserWarning, match="stopped at its cap of 2 evaluations before converging"):
+        res = match_recipe(m, target, mode="spectral")
+    assert any("cap of 2" in w for w in res.warnings)

@@ -466,7 +466,12 @@ def _shares_and_total(model, x, J, R0, Rt, quad, lo, hi, noise, dchi2: float = 1
 _SHRINK = 0.35  # a rejected step's box: 0.35 of it (¼ was too timid along the curved valley, ½ too bold)
 
 
-def _quasi_newton(fun, u0, J0, stop_norm: float, max_evals: int = 80, ftol: float = 1e-6):
+#: the adding–doubling finish's evaluation cap; a finish stopped by it is warned (not converged)
+_FINISH_MAX_EVALS = 80
+
+
+def _quasi_newton(fun, u0, J0, stop_norm: float, max_evals: int | None = None, ftol: float = 1e-6,
+                  report: dict | None = None):
     """Bounded Gauss–Newton on [0, 1]^n in a box trust region, whose Jacobian starts from ``J0`` (the
     Kubelka–Munk model's, cheap; None: forward differences of ``fun``) and is corrected by Broyden's
     rank-one update after every evaluation (Broyden 1965; Dennis & Schnabel 1996, §8.3), so a step
@@ -477,8 +482,12 @@ def _quasi_newton(fun, u0, J0, stop_norm: float, max_evals: int = 80, ftol: floa
     doubles it. A Jacobian updated twice or more since its last forward differences that mispredicts
     (ρ < 0.3) is refreshed by them (n evaluations) instead of shrinking Δ; a step that gains less than
     ``ftol`` with a fresh Jacobian, or a box below 1e-9, ends the fit (a noisy or unreachable target).
-    Returns (u, residual) at the best point."""
+    Returns (u, residual) at the best point; ``report["capped"]`` (when a dict is given) says whether
+    the evaluation cap ended it instead."""
     from scipy.optimize import lsq_linear
+
+    max_evals = _FINISH_MAX_EVALS if max_evals is None else max_evals
+    converged = False
 
     u = np.array(u0, float)
     r = fun(u)
@@ -496,6 +505,7 @@ def _quasi_newton(fun, u0, J0, stop_norm: float, max_evals: int = 80, ftol: floa
         step = float(np.max(np.abs(d)))
         if step < 1e-12:
             if fresh:
+                converged = True
                 break
             J, since = _forward_jacobian(fun, u, r), 0
             n_eval += u.size
@@ -514,6 +524,7 @@ def _quasi_newton(fun, u0, J0, stop_norm: float, max_evals: int = 80, ftol: floa
             gain = (cost - cost_new) / cost
             u, r, cost = u_new, r_new, cost_new
             if gain < ftol and fresh:
+                converged = True
                 break
             if rho > 0.75 and step > 0.9 * delta:
                 delta = min(2 * delta, 1.0)
@@ -524,6 +535,8 @@ def _quasi_newton(fun, u0, J0, stop_norm: float, max_evals: int = 80, ftol: floa
         if rho < 0.3 and worn:  # the corrected Jacobian mispredicts: refresh it, keep the box
             J, since = _forward_jacobian(fun, u, r), 0
             n_eval += u.size
+    if report is not None:
+        report["capped"] = not converged and n_eval >= max_evals and np.sqrt(cost) >= stop_norm and delta > 1e-9
     return u, r
 
 
@@ -656,14 +669,15 @@ def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, m
             J0 = _forward_jacobian(lambda v: residuals(v, "km", None), u0, residuals(u0, "km", None))
         else:
             J0 = None
-        u, fun = _quasi_newton(lambda v: residuals(v, "ad", quad), u0, J0, stop_norm)
+        how = {}
+        u, fun = _quasi_newton(lambda v: residuals(v, "ad", quad), u0, J0, stop_norm, report=how)
         q_auto = model.quad_pts_at(phys(u))
         R = cache.get((np.asarray(u, float).tobytes(), quad)) if q_auto == quad else None
         if R is None:
             R = model.reflectance(phys(u), "ad", None)  # the automatic quadrature, as `nmmm run` computes it
         lab = spectra_to_lab(w, np.clip(R, 0, None), illuminant, observer)
         cands.append(dict(u=u, R=R, lab=lab, de00=float(delta_e2000(lab_t, lab)), cost=float(np.sum(fun**2)),
-                          R_quad=cache.get((np.asarray(u, float).tobytes(), quad))))
+                          R_quad=cache.get((np.asarray(u, float).tobytes(), quad)), capped=how.get("capped", False)))
     bar.update(1)
     bar.close()
     cands.sort(key=lambda c: c["de00"])
@@ -697,6 +711,12 @@ def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, m
             and all(np.isfinite(v) for v in se.values()):
         shares, total = _shares_and_total(model, x, J, R0, Rt, quad, lo, lo + span, noise)
     msgs = []
+    if best["capped"] and best["de00"] > refine_above_de00:  # capped below it: a noisy target's spectral part
+        msg = (f"the adding-doubling finish stopped at its cap of {_FINISH_MAX_EVALS} evaluations before converging "
+               f"(ΔE00 {best['de00']:.3g} there): a better match may exist — narrow the --vary bounds or start the "
+               "recipe nearer the target")
+        warnings.warn(msg, stacklevel=2)
+        msgs.append(msg)
     if total and (total["low_at_bound"] or total["high_at_bound"]):
         ends = [e for e, hit in (("lower", total["low_at_bound"]), ("upper", total["high_at_bound"])) if hit]
         msg = (f"the total of the matched fractions, {total['total']:.4g}, is pinned by the spectrum (noise {noise:g}) "
