@@ -8,7 +8,11 @@ roughness, cut at 3σ_g) around f, so flake k adds X_k = K w_k g(∠(f_k, ωo)) 
 radiance, with K the same for all flakes of the pixel (irradiance, coat transmission in
 and out, flake reflectance, 1/(A cos θo)) and w_k = a_k exp(−τ_e S ζ_k) its own weight
 (area a_k, mean-field attenuation by the flakes above it, ζ_k its optical-depth fraction,
-S the path factor of :func:`nmmm.appearance.brdf.flake_list_reflection`).
+S the path factor of :func:`nmmm.appearance.brdf.flake_list_reflection`); in a pigmented
+basecoat (:class:`~nmmm.appearance.brdf.CoatMedium`, optical thickness κ = (μa + μs) H,
+flakes in the band z0 … z0 + dz) also exp(−κ S' (z0 + dz ζ_k)), S' = 1/μi' + 1/μo' —
+the same per-flake form whose mean is the statistical term's
+e^{−κ z0 S'} (1 − e^{−X})/X, X = τ_e S + κ dz S'.
 
 Flake centres form a stationary point process of density n_A (flakes / mm²) and their
 normals follow the tilt density p_m per sr (:class:`~nmmm.appearance.flakes.TiltDistribution`),
@@ -218,8 +222,13 @@ def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_sprea
     mu_g = np.linspace(0.05, 1.0, 96)
     a_g = np.asarray(tilt.projected_mean(mu_g), float)
     S = np.interp(ip[..., 2], mu_g, a_g) / ip[..., 2] + np.interp(op[..., 2], mu_g, a_g) / op[..., 2]
-    # moments over the flakes: Σ a e^{-x ζ}, Σ a² e^{-2 x ζ} on a grid of x = τ_e S
-    x = tau_e * S
+    # a pigmented basecoat (κ = (μa + μs) H, flakes in the band z0 … z0 + dz): flake k at
+    # z0 + dz ζ_k is dimmed by e^{−κ S' (z0 + dz ζ_k)}, S' = 1/μi' + 1/μo'; e^{−κ S' z0} is
+    # common to all flakes of the pixel (in K), κ dz S' joins the exponent of ζ
+    kappa = float(np.mean(getattr(tab, "kappa", 0.0)))
+    S2 = 1.0 / np.maximum(ip[..., 2], 1e-9) + 1.0 / np.maximum(op[..., 2], 1e-9)
+    # moments over the flakes: Σ a e^{-x ζ}, Σ a² e^{-2 x ζ} on a grid of x = τ_e S + κ dz S'
+    x = tau_e * S + kappa * float(getattr(tab, "dz", 1.0)) * S2
     xs = np.linspace(float(x.min()), float(x.max()), 33) if x.size else np.zeros(1)
     m1 = np.array([np.mean(a * np.exp(-v * zeta)) for v in xs])
     m2 = np.array([np.mean((a * np.exp(-v * zeta)) ** 2) for v in xs])

@@ -62,10 +62,12 @@ if _nb is not None:
     def _glint_tiles(fill, offsets, rec_pix, rec_w, rec_th, rec_li, counts,
                      cam, cam_r, cam_u, cam_f, tx, ty, sx, sy, W, H,
                      hx, hy, cw, ch, i0, i1, j0, j1,
-                     fpos, fnrm, farea, fdiam, fzeta, G, gstart_all, gorder_all,
+                     fpos, fnrm, farea, fdiam, fzeta, fpig, G, gstart_all, gorder_all,
                      lkind, lvec, lscale, n, sigma, cut, a_tab, astep, randomize, seed, splat):
         """One pass over the visible tiles (rows j in parallel): count (fill=False) or
-        write (fill=True) the glint records (pixel, weight, angles, light)."""
+        write (fill=True) the glint records (pixel, weight, angles, light). ``fpig`` (N,) is
+        the fraction of the coat's pigment optical thickness κ above each flake (z0 + dz ζ),
+        recorded as S' fpig (S' = 1/μi' + 1/μo') for the pigments' exp(−κ S' fpig)."""
         pix_sa = (2 * tx / W) * (2 * ty / H)
         nl = lkind.size
         inv2s2 = 1.0 / (2 * sigma * sigma)
@@ -260,6 +262,7 @@ if _nb is not None:
                                 th1 = 0.0
                                 th2 = 0.0
                                 th3 = 0.0
+                                th4 = 0.0
                                 if fill:
                                     th0 = math.degrees(math.acos(min(1.0, lz)))
                                     th1 = math.degrees(math.acos(min(1.0, fz)))
@@ -267,6 +270,7 @@ if _nb is not None:
                                     S = (_lerp1_nb(a_tab, math.degrees(math.acos(min(1.0, jz))), astep) / jz
                                          + _lerp1_nb(a_tab, math.degrees(math.acos(min(1.0, qz))), astep) / qz)
                                     th3 = S * fzeta[k]
+                                    th4 = (1.0 / jz + 1.0 / qz) * fpig[k]
                                 if not area:
                                     if fill:
                                         o = base + cnt
@@ -276,6 +280,7 @@ if _nb is not None:
                                         rec_th[o, 1] = th1
                                         rec_th[o, 2] = th2
                                         rec_th[o, 3] = th3
+                                        rec_th[o, 4] = th4
                                         rec_li[o] = li
                                     cnt += 1
                                     continue
@@ -304,6 +309,7 @@ if _nb is not None:
                                             rec_th[o, 1] = th1
                                             rec_th[o, 2] = th2
                                             rec_th[o, 3] = th3
+                                            rec_th[o, 4] = th4
                                             rec_li[o] = li
                                         cnt += 1
                                 if fill and tot > 0.0:

@@ -85,6 +85,12 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     else:
         top, bottom = fl.layer_depth_nm
         fzeta = np.clip((fl.depth_nm - top) / max(bottom - top, 1e-9), 0.0, 1.0)
+    # the pigments of a pigmented basecoat (κ = (μa + μs) H, flakes in the band z0 … z0 + dz):
+    # flake k lies at z0 + dz ζ_k — its rank in depth mapped onto the band, so that the
+    # flakes' mean e^{−τ_e S ζ − κ S' (z0 + dz ζ)} is the statistical term's
+    # e^{−κ z0 S'} (1 − e^{−X})/X, X = τ_e S + κ dz S' (nmmm.appearance.brdf.effect_tables)
+    kappa = np.ascontiguousarray(np.broadcast_to(np.asarray(getattr(tab, "kappa", 0.0), float), (w.size,)))
+    fpig = np.ascontiguousarray(float(getattr(tab, "z0", 0.0)) + float(getattr(tab, "dz", 1.0)) * fzeta)
     cut = 3.0
     mfac = min(2.0, 1.1 / (2 * math.sqrt(max(n * n - 1, 1e-6))))
     G = int(np.clip(4.0 / (mfac * cut * sigma), 4, 512))
@@ -115,16 +121,16 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     offsets = np.zeros(nrow, np.int64)
     e0 = np.zeros(0, np.int64)
     args = (cam, r, u, f, tx, ty, sx, sy, Wd, Hd, hx, hy, cw, ch, i0, i1, j0, j1,
-            fpos, fnrm, farea, fdiam, fzeta, G, gstart, order, lkind, lvec, lscale, n, sigma, cut, a_tab, tab.step,
+            fpos, fnrm, farea, fdiam, fzeta, fpig, G, gstart, order, lkind, lvec, lscale, n, sigma, cut, a_tab, tab.step,
             bool(randomize_tiles), int(tile_seed), bool(area_splat))
-    _glint_tiles(False, offsets, e0, np.zeros(0), np.zeros((0, 4)), e0, counts, *args)
+    _glint_tiles(False, offsets, e0, np.zeros(0), np.zeros((0, 5)), e0, counts, *args)
     total = int(counts.sum())
     if total == 0:
         return 0
     offsets[1:] = np.cumsum(counts)[:-1]
     rec_pix = np.empty(total, np.int64)
     rec_w = np.empty(total)
-    rec_th = np.empty((total, 4))
+    rec_th = np.empty((total, 5))
     rec_li = np.empty(total, np.int64)
     _glint_tiles(True, offsets, rec_pix, rec_w, rec_th, rec_li, counts, *args)
     espec = np.ascontiguousarray(np.stack(spectra), float)
@@ -134,5 +140,6 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     rec_pix, rec_w, rec_th, rec_li = rec_pix[order], rec_w[order], rec_th[order], rec_li[order]
     starts = np.flatnonzero(np.r_[True, rec_pix[1:] != rec_pix[:-1], True]).astype(np.int64)
     _glint_splat(flat, starts, rec_pix, rec_w, rec_th, rec_li, np.ascontiguousarray(tab.Tc), np.ascontiguousarray(tab.Rf),
-                 tab.step, tau_e, bool(np.ptp(tau_e) <= 1e-12 * max(1.0, float(tau_e.max()))), espec)
+                 tab.step, tau_e, bool(np.ptp(tau_e) <= 1e-12 * max(1.0, float(tau_e.max())) and not np.any(kappa > 0)),
+                 espec, kappa)
     return total

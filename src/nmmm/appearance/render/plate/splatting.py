@@ -1,7 +1,8 @@
 """Splatting of the glint records onto the image (Numba): records sorted by pixel, one pixel
 group per task, each record's spectrum the coat transmission in and out, the flake
-reflectance at its local angle, the mean-field attenuation by the flakes above it and the
-light's spectrum (``_glint_splat``).
+reflectance at its local angle, the mean-field attenuation by the flakes above it, the
+extinction by the pigments of the coat above it (a pigmented basecoat,
+:class:`~nmmm.appearance.brdf.CoatMedium`) and the light's spectrum (``_glint_splat``).
 """
 
 from __future__ import annotations
@@ -22,9 +23,12 @@ def _needs_numba(*args):  # pragma: no cover - only without numba
 
 if _nb is not None:
     @_nb.njit(parallel=True, cache=True, fastmath=True)
-    def _glint_splat(img, gstart, rec_pix, rec_w, rec_th, rec_li, Tc, Rf, step, tau_e, const_tau, espec):
+    def _glint_splat(img, gstart, rec_pix, rec_w, rec_th, rec_li, Tc, Rf, step, tau_e, const_tau, espec, kappa):
         """Add the glint spectra to the image; records sorted by pixel, one pixel group
-        per task (no write conflicts, deterministic order)."""
+        per task (no write conflicts, deterministic order). ``const_tau``: τ_e is the same
+        at every wavelength and there is no pigment (κ = 0); else each wavelength gets
+        exp(−τ_e(λ) S ζ − κ(λ) S' (z0 + dz ζ)) (``rec_th[:, 3]`` = S ζ, ``rec_th[:, 4]`` =
+        S' (z0 + dz ζ)), the flake term of :mod:`nmmm.appearance.brdf.effect_tables` per flake."""
         L = img.shape[1]
         nt = Tc.shape[0]
         ng = gstart.size - 1
@@ -42,6 +46,7 @@ if _nb is not None:
                 f2 = min(x2 - a2, 1.0)
                 wgt = rec_w[r]
                 sz = rec_th[r, 3]
+                sk = rec_th[r, 4]
                 li = rec_li[r]
                 if const_tau:
                     wgt *= math.exp(-tau_e[0] * sz)
@@ -55,6 +60,6 @@ if _nb is not None:
                         ti = Tc[a0, l] * (1 - f0) + Tc[a0 + 1, l] * f0
                         to = Tc[a1, l] * (1 - f1) + Tc[a1 + 1, l] * f1
                         rf = Rf[a2, l] * (1 - f2) + Rf[a2 + 1, l] * f2
-                        img[p, l] += wgt * ti * to * rf * math.exp(-tau_e[l] * sz) * espec[li, l]
+                        img[p, l] += wgt * ti * to * rf * math.exp(-tau_e[l] * sz - kappa[l] * sk) * espec[li, l]
 else:  # pragma: no cover
     _glint_splat = _needs_numba
