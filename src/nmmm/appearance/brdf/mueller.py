@@ -24,11 +24,16 @@ direction), a reflection is (Collett 2005 eq. 8-26; Mitsuba 3's ``mueller::specu
 
 and a transmission M_T = ½ [[Ts+Tp, Ts−Tp, 0, 0], [Ts−Tp, Ts+Tp, 0, 0], [0, 0, 2√(TsTp), 0],
 [0, 0, 0, 2√(TsTp)]]. nmmm's ``rp`` has the sign of Mitsuba's ``a_p`` (the "Verdet" convention,
-rp = −rs at normal incidence), so the two agree element by element.
+rp = −rs at normal incidence), so for a dielectric (the coat) the two agree element by element. For an
+absorbing medium (a metal flake) Mitsuba's ``fresnel_polarized`` returns the complex conjugates of
+nmmm's rs, rp (its e^{+iωt} time convention; :func:`nmmm.layers.fresnel` uses e^{−iωt} with n + ik), so
+the retardance elements M23, M32 — and the S3 of a metal reflection — have the opposite sign in
+Mitsuba; S0, S1, S2 agree (tests/appearance/render/test_mitsuba_polarized.py).
 
 Stokes vectors (S0, S1, S2, S3): S1 = I(x) − I(y), S2 = I(+45°) − I(−45°) in a frame (x, y)
-perpendicular to the propagation direction d with (x, y, d) right-handed; S3 > 0 for a field
-rotating from x to y (Collett's sign). An unpolarized beam reflected once has the degree of
+perpendicular to the propagation direction d with (x, y, d) right-handed; S3 = 2 Im(E_y E_x*) with
+e^{−iωt} fields: S3 > 0 for a field rotating from x to y (counter-clockwise as seen looking into the
+beam). An unpolarized beam reflected once has the degree of
 polarization (Rs − Rp)/(Rs + Rp), polarized along s; it is 1 at Brewster's angle of a dielectric.
 
 Public functions
@@ -45,7 +50,8 @@ References
   Fundamentals and Applications*, Marcel Dekker (1993), ch. 8 (Mueller matrices of reflection and
   transmission at a dielectric interface).
 - M. Born, E. Wolf, *Principles of Optics*, 7th ed. (1999), §1.5 (Fresnel, Brewster's angle).
-- W. Jakob et al., Mitsuba 3 (2022), ``include/mitsuba/render/mueller.h`` (the same conventions).
+- W. Jakob et al., Mitsuba 3 (2022), ``include/mitsuba/render/mueller.h`` (the same frames; S3 of a metal
+  reflection has the opposite sign, see above).
 """
 
 from __future__ import annotations
