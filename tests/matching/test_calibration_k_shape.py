@@ -131,3 +131,13 @@ def test_the_calibrated_compound_is_not_extrapolated_outside_the_window():
     np.testing.assert_allclose(res.calibrated_nk([400.0, 500.0, 700.0])[1], one[0], rtol=1e-12)
     k0 = base.nk(np.array([500.0])).imag
     np.testing.assert_allclose(one.imag, k0 * k_correction_factor([500.0], (400, 700), 1.25, (0.2,)), rtol=1e-12)
+
+
+def test_a_value_stopped_at_its_bound_is_said(ladder):
+    """The injected k_scale is 1.2: bounded to at most 1.1 the fit stops there, and its standard error
+    (from the Jacobian at the bound) would look like a measurement — the result says it is not."""
+    from nmmm.matching.recipe_match import IdentifiabilityWarning
+
+    with pytest.warns(IdentifiabilityWarning, match=r"k_scale = 1.1 stopped at its bound \[0.5, 1.1\]"):
+        res = calibrate_colourant(ladder[:4], "hematite", fit=("k_scale", "size_scale"), bounds={"k_scale": (0.5, 1.1)})
+    assert res.values["k_scale"] == pytest.approx(1.1) and any("stopped at its bound" in n for n in res.warnings)

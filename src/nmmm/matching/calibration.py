@@ -264,7 +264,7 @@ def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, lef
     except np.linalg.LinAlgError:
         cov = np.full((len(fit), len(fit)), np.inf)
         se = {f: float("inf") for f in fit}
-    notes = _identifiability(fit, r.x, se, cov)
+    notes = _identifiability(fit, r.x, se, cov, r.active_mask, lo, hi)
     sk, sd, coef = params(r.x)
     before, after, pred, unc = {}, {}, {}, {}
     for p in prepared:
@@ -283,13 +283,18 @@ def calibrate_colourant(samples, compound: str, fit=DEFAULT_CALIBRATION_FIT, lef
 SE_WARNING, CORRELATION_WARNING = 0.1, 0.95
 
 
-def _identifiability(fit, x, se, cov) -> list[str]:
-    """Messages for values the ladder fixes poorly, each issued as an IdentifiabilityWarning."""
+def _identifiability(fit, x, se, cov, active=None, lo=None, hi=None) -> list[str]:
+    """Messages for values the ladder fixes poorly, each issued as an IdentifiabilityWarning; a value
+    stopped at its bound is one (its standard error describes the bound, not the ladder)."""
     import warnings
 
     from nmmm.matching.recipe_match import IdentifiabilityWarning
 
     notes = []
+    for i, f in enumerate(fit):
+        if active is not None and active[i] != 0:
+            notes.append(f"{f} = {x[i]:.4g} stopped at its bound [{lo[i]:g}, {hi[i]:g}]: the ladder asks for a value beyond "
+                         "it and the standard error does not hold — widen bounds= or check the ladder's recipes")
     for i, f in enumerate(fit):
         rel = se[f] / abs(x[i]) if f in ("k_scale", "size_scale") else se[f]
         if not np.isfinite(rel) or rel > SE_WARNING:
