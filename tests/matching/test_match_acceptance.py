@@ -140,6 +140,7 @@ def test_shares_and_total_interval_reach_the_result_files(tmp_path):
     """match.json and report.md carry the shares (±σ) and the total's 68 % profile interval beside the
     linearised σ, so a user reads what the spectrum pins."""
     import json
+    import re
 
     from nmmm.matching.outputs import write_match_outputs
 
@@ -150,5 +151,7 @@ def test_shares_and_total_interval_reach_the_result_files(tmp_path):
     got = json.loads(files["json"].read_text())
     assert set(got["shares"]) == {b.key for b in m.bounds} and got["noise"] == 0.002
     assert got["total"]["low"] <= sum(res.values.values()) <= got["total"]["high"]
+    assert any(re.search(r"68 % profile interval; (both ends are|its (lower|upper) end is) at the --vary bounds", w)
+               for w in res.warnings) == (got["total"]["low_at_bound"] or got["total"]["high_at_bound"])
     report = files["report"].read_text()
     assert "σ linearised (noise 0.002)" in report and "68 % profile interval" in report

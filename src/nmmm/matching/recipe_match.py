@@ -720,8 +720,8 @@ def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, m
     if total and (total["low_at_bound"] or total["high_at_bound"]):
         ends = [e for e, hit in (("lower", total["low_at_bound"]), ("upper", total["high_at_bound"])) if hit]
         msg = (f"the total of the matched fractions, {total['total']:.4g}, is pinned by the spectrum (noise {noise:g}) "
-               f"only to {total['low']:.4g}–{total['high']:.4g} (68 % profile interval; its {' and '.join(ends)} end "
-               "is the --vary bounds): the shares are what it fixes ("
+               f"only to {total['low']:.4g}–{total['high']:.4g} (68 % profile interval; "
+               + ("both ends are" if len(ends) == 2 else f"its {ends[0]} end is") + " at the --vary bounds): the shares are what it fixes ("
                + ", ".join(f"{k} {v:.3g} ± {e:.2g}" for k, (v, e) in shares.items())
                + "); measure over black and white or fix the film's amount")
         warnings.warn(IdentifiabilityWarning(msg), stacklevel=2)
