@@ -30,7 +30,8 @@ def _recipe_brdf(name):
     return plate.brdf  # the statistical BRDF (flakes averaged) for an effect paint
 
 
-@pytest.mark.parametrize("recipe", ["hematite_paint.toml", "grey_metallic.toml"])
+# ~9 s for the hematite (its sky light is sampled by Mitsuba), ~4 s for the metallic (kept in the quick run)
+@pytest.mark.parametrize("recipe", [pytest.param("hematite_paint.toml", marks=pytest.mark.slow), "grey_metallic.toml"])
 def test_plate_regions_match_mitsuba(recipe):
     _mitsuba()
     from nmmm.appearance.render.mitsuba_crosscheck import crosscheck_plate
@@ -67,6 +68,7 @@ def test_regions_refuse_a_plate_smaller_than_the_grid():
     assert len(regs) == 4 and sum(int(m.sum()) for _, _, m in regs) == 100
 
 
+@pytest.mark.slow  # ~17 s
 def test_booth_plate_regions_match_mitsuba():
     """The hematite recipe in the viewing booth (25 mm D65 lamp at 45 deg behind the plate, grey walls
     as nmmm's lat-long map -> Mitsuba's nmmm_envmap, spherical area lamp): the coat's mirror image of
@@ -85,3 +87,54 @@ def test_booth_plate_regions_match_mitsuba():
     assert np.abs(cc.deviation).max() < 0.02, cc.table()
     # the back wall's mirror image makes the near (bottom) middle region 2.7x the far corners
     assert cc.mean_mitsuba[2, 1] > 2 * cc.mean_mitsuba[0, 0]
+
+
+def _booth_point_lamp(brdf):
+    """The 45-degree booth's source as a point lamp (radius 0) for both renderers: nmmm shades a lamp of
+    any radius as a point (PointLight's docstring), so this is the scene as nmmm models it; the 25 mm
+    sphere's mirror image does not fall on the plate from this camera."""
+    import dataclasses
+
+    from nmmm.appearance.render import PaintedPlate, ViewingBooth
+
+    scene = ViewingBooth(source="45").scene(PaintedPlate(brdf), W)
+    return [dataclasses.replace(lt, radius_mm=0.0) for lt in scene["lights"]], scene["environment"]
+
+
+@pytest.mark.slow
+def test_booth_lamp_on_the_metallic_matches_mitsuba():
+    """The grey metallic recipe (statistical flakes) lit by the booth's 45-degree D65 lamp as a point lamp
+    in both renderers: region means within 2 % (measured |dev| <= 0.62 %, s.e. <= 0.05 % at 4096 spp;
+    with Mitsuba's 25 mm sphere instead, -2.5 % at the flake highlight: nmmm shades it as a point)."""
+    _mitsuba()
+    from nmmm.appearance.render.mitsuba_crosscheck import crosscheck_plate
+
+    brdf = _recipe_brdf("grey_metallic.toml")
+    lamps, _ = _booth_point_lamp(brdf)
+    cc = crosscheck_plate(brdf, lamps, None, position_mm=(0.0, -333.0, 222.0), fov_deg=40, resolution=(48, 32),
+                          spp=4096, wavelength_nm=W)
+    print(cc.table())
+    assert cc.standard_error.max() < 0.005, cc.table()
+    assert np.abs(cc.deviation).max() < 0.02, cc.table()
+    assert np.ptp(cc.mean_nmmm) > 0.5 * cc.mean_nmmm.mean()  # the flake highlight in the middle column
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="nmmm's render_plate integrates a lat-long map's light on the flake lobe over "
+                   "8 x 16 hemisphere cells: the booth walls' share of the grey metallic plate is 27-32 % low in "
+                   "the middle column (Mitsuba +4.8 to +6.3 % on lamp + walls; 32 x 64 cells: <= 1.6 %)")
+def test_booth_metallic_with_walls_matches_mitsuba():
+    """The grey metallic recipe in the whole booth (point lamp as above + the grey walls as a lat-long map):
+    the issue's 'same scene (plate, source, booth)' for a metallic paint. Fails today by +4.8 to +6.3 % in
+    the middle column (16384 spp, s.e. 0.2-0.3 % there; here 4096 spp: +5.1 to +5.9 %, s.e. <= 0.4 %); remove the xfail when the renderer's
+    environment quadrature resolves the flake lobe."""
+    _mitsuba()
+    from nmmm.appearance.render.mitsuba_crosscheck import crosscheck_plate
+
+    brdf = _recipe_brdf("grey_metallic.toml")
+    lamps, env = _booth_point_lamp(brdf)
+    cc = crosscheck_plate(brdf, lamps, env, position_mm=(0.0, -333.0, 222.0), fov_deg=40, resolution=(48, 32),
+                          spp=4096, wavelength_nm=W)
+    print(cc.table())
+    assert cc.standard_error[:, 1].max() < 0.01, cc.table()
+    assert np.abs(cc.deviation).max() < 0.02, cc.table()
