@@ -158,3 +158,36 @@ def test_cxf_multi_angle_and_sphere_sets_in_one_file(tmp_path):
     assert p.read_text().count("<cc:ColorSpecification ") == 2
     np.testing.assert_allclose(read_cxf(p, geometry="SCI").reflectance, 0.5)
     assert Path(p).stat().st_size > 0
+
+
+def test_multi_angle_metallic_above_one_near_specular_is_read_as_factors(tmp_path):
+    """A silver's near-specular 45as-15 factors reach 3-5 (L* ~170); in a multi-angle CxF3 file whose
+    45as110 spectra stay below 1.5 they are factors, not percent (before: refused as percent, with no
+    way to read them). Alone, such values are refused with the hint; unit='fraction' reads them."""
+    w = np.arange(400.0, 701.0, 10.0)
+    bright = [MeasuredSpectra(w, np.full((1, w.size), v), ("silver",), g)
+              for v, g in ((3.5, "45as-15"), (2.2, "45as15"), (0.2, "45as110"))]
+    p = write_cxf(tmp_path / "silver.cxf", bright)
+    np.testing.assert_allclose(read_cxf(p, geometry="45as-15").reflectance, 3.5)
+    np.testing.assert_allclose(read_cxf(p, geometry="45as110").reflectance, 0.2)
+    alone = write_cxf(tmp_path / "alone.cxf", bright[:1])
+    with pytest.raises(DataFileError, match="look like percent.*near-specular multi-angle.*CLI --fraction"):
+        read_cxf(alone)
+    np.testing.assert_allclose(read_cxf(alone, unit="fraction").reflectance, 3.5)
+    percent = write_cxf(tmp_path / "pc.cxf", [MeasuredSpectra(w, np.full((1, w.size), 100 * v), ("silver",), g)
+                                              for v, g in ((0.35, "45as-15"), (0.2, "45as110"))])
+    with pytest.raises(DataFileError, match="look like percent"):  # percent at every angle: still refused
+        read_cxf(percent, geometry="45as-15")
+
+
+def test_match_cli_fraction_flag(tmp_path, capsys):
+    from nmmm.cli import main
+    from nmmm.recipes.schema import example_path
+
+    fac = TI3.replace("85.20 86.70 87.90", "0.352 0.367 0.379").replace("0.61 0.58 0.55", "0.0061 0.0058 0.0055")
+    p = _write(tmp_path, "factors.ti3", fac)
+    args = ["match", str(p), str(example_path("hematite_tint")), "--vary", "pigments.0.fraction=0.005:0.08", "--no-progress"]
+    assert main(args + ["--percent", "--fraction", "-o", str(tmp_path / "a")]) == 2
+    assert "--percent and --fraction: give one" in capsys.readouterr().err
+    rs = read_cgats(p, unit="fraction")
+    assert rs.reflectance.max() == pytest.approx(0.379)

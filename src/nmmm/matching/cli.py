@@ -40,6 +40,8 @@ def _target(target: str, unit: str, geometry, sample):
 @click.option("--sample", default=None, help="Which sample of a multi-sample file (default: the first).")
 @click.option("--geometry", default=None, help="Which geometry of a multi-angle CxF3 file.")
 @click.option("--percent", is_flag=True, help="The file's reflectances are in percent (0-100).")
+@click.option("--fraction", is_flag=True,
+              help="The file's reflectances are factors whatever their size (a metallic near the specular exceeds 1).")
 @click.option("--delta-e", "delta_e_method", default="CIE 2000", show_default=True, metavar="METHOD",
               help="Reported colour difference (the fit stays on dE00): CIE 1976, CIE 1994[(textiles)], CMC[(l:c)], "
                    "CIE 2000[(kL:kC:kH)]; aliases dE76, dE94, dE00, e.g. 'CMC(2:1)'.")
@@ -50,7 +52,7 @@ def _target(target: str, unit: str, geometry, sample):
               help="Colourant selection: the varied pigments.<i>.fraction keys are a palette; rank its subsets of at most "
                    "N colourants (the others at fraction 0); matches.csv has one row per subset.")
 def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_weight, sample, geometry, percent, no_progress,
-          max_colourants=None, delta_e_method="CIE 2000", tolerance=None):
+          max_colourants=None, delta_e_method="CIE 2000", tolerance=None, fraction=False):
     """Match RECIPE's free keys (--vary) to TARGET: a CGATS.17 / CxF3 / CSV file, or lab:L,a,b."""
     import warnings
     from pathlib import Path
@@ -60,7 +62,11 @@ def match(target, recipe, varies, output, mode, illuminant, tests, metamerism_we
     from nmmm.matching.recipe_match import IdentifiabilityWarning, RecipeModel, match_recipe
 
     method, k, label = _delta_e_spec(delta_e_method, tolerance)
-    ms, lab, name = _target(target, "percent" if percent else "auto", geometry, sample)
+    if percent and fraction:
+        from nmmm.errors import InvalidInputError
+
+        raise InvalidInputError("--percent and --fraction: give one (percent: 0-100; fraction: factors)")
+    ms, lab, name = _target(target, "percent" if percent else "fraction" if fraction else "auto", geometry, sample)
     model = RecipeModel(recipe, varies)
     R = None
     if ms is not None:

@@ -19,7 +19,10 @@
 Units. A file holds reflectance factors (0–1) or percent (0–100). ``unit="auto"`` reads factors
 and refuses values above 1.5 as "percent, not factors" (a measured factor reaches ~1.1 at most
 for fluorescent whites), never rescaling silently; ``unit="percent"`` says so and divides by
-100. CGATS's ``SPECTRAL_NORM`` keyword (100 or 1, as X-Rite writes it) declares it too.
+100. CGATS's ``SPECTRAL_NORM`` keyword (100 or 1, as X-Rite writes it) declares it too. Near the
+specular a metallic's multi-angle factors exceed 1 (a silver's 45as-15: ~3–5): a CxF3 file of
+aspecular angles only is read as factors up to :data:`MULTI_ANGLE_FACTOR_MAX` when at one of its
+angles no spectrum exceeds 1.5; ``unit="fraction"`` reads any values as factors.
 
 Why not colour-science's readers: ``colour.read_sds_from_xrite_file`` reads X-Rite's CGATS
 dialect but drops the geometry and keywords and does not see a truncated data block; colour-science
@@ -54,6 +57,9 @@ __all__ = ["MeasuredSpectra", "read_cgats", "write_cgats", "read_cxf", "write_cx
 PERCENT_THRESHOLD = 1.5
 CXF_NS = "http://colorexchangeformat.com/CxF3-core"
 _UNITS = ("auto", "fraction", "percent")
+#: the largest reflectance factor read as factors without unit='fraction' in a multi-angle CxF3 file whose other
+#: angles stay below PERCENT_THRESHOLD (a silver's near-specular 45as-15 reading: ~3-5)
+MULTI_ANGLE_FACTOR_MAX = 15.0
 
 
 @dataclass(frozen=True)
@@ -120,15 +126,16 @@ def _scaled(values: np.ndarray, unit: str, where: str, declared: str | None = No
 
             warnings.warn(f"{where}: read as percent ({declared}), but no value exceeds {PERCENT_THRESHOLD:g} (the "
                           f"largest is {top:g} %): an almost black sample; if these are reflectance factors (0-1), "
-                          "read with unit='fraction' or fix the file", UserWarning, stacklevel=3)
+                          "read with unit='fraction' (CLI --fraction) or fix the file", UserWarning, stacklevel=3)
         elif top <= PERCENT_THRESHOLD:
             raise DataFileError(f"{where}: read as percent (unit='percent', CLI --percent), but no value exceeds "
                                 f"{PERCENT_THRESHOLD:g} (the largest is {top:g}): these are reflectance factors (0-1); "
                                 "dividing them by 100 would give an almost black sample — drop --percent")
         return values / 100.0
-    if top > PERCENT_THRESHOLD:
+    if top > PERCENT_THRESHOLD and unit == "auto":  # unit='fraction': the caller says so (a bright metallic near specular)
         raise DataFileError(f"{where}: reflectance up to {top:g} — these look like percent, not factors (0-1); "
-                            "read with unit='percent' (CLI --percent) to divide by 100, or fix the file")
+                            "read with unit='percent' (CLI --percent) to divide by 100, or fix the file (a near-specular "
+                            "multi-angle reading of an effect finish can exceed 1: then unit='fraction', CLI --fraction)")
     if float(values.min()) < -0.05:
         raise DataFileError(f"{where}: reflectance down to {float(values.min()):g} < 0; a measured reflectance factor is >= 0")
     return values
@@ -442,7 +449,16 @@ def read_cxf(path, geometry: str | None = None, unit: str = "auto") -> MeasuredS
         if wi.size != w.size or not np.allclose(wi, w):
             raise DataFileError(f"{p.name}: object {name!r} is on another wavelength grid ({wi[0]:g}–{wi[-1]:g} nm, "
                                 f"{wi.size} values) than the first ({w[0]:g}–{w[-1]:g} nm, {w.size})")
-    R = _scaled(np.stack([v for *_, v in chosen]), unit, p.name)
+    values = np.stack([v for *_, v in chosen])
+    if unit == "auto" and values.size and PERCENT_THRESHOLD < float(values.max()) <= MULTI_ANGLE_FACTOR_MAX:
+        # a multi-angle file: near the specular a metallic's factors exceed 1 (3-5 at 45as-15 for a silver); the
+        # file is in factors when, at another of its angles, no spectrum exceeds the percent threshold
+        top = {}
+        for _, g, _, v in samples:
+            top[canonical_geometry(g)] = max(top.get(canonical_geometry(g), 0.0), float(np.max(v)))
+        if all(_ASPECULAR.fullmatch(g or "") for g in top) and min(top.values()) <= PERCENT_THRESHOLD:
+            unit = "fraction"
+    R = _scaled(values, unit, p.name)
     return MeasuredSpectra(w, R, tuple(n for n, *_ in chosen), chosen[0][1], {"geometries": geos})
 
 
