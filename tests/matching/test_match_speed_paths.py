@@ -131,3 +131,13 @@ def test_match_stopped_by_the_cap_is_warned(monkeypatch):
     with pytest.warns(UserWarning, match="stopped at its cap of 2 evaluations before converging"):
         res = match_recipe(m, target, mode="spectral")
     assert any("cap of 2" in w for w in res.warnings)
+
+
+def test_a_result_counts_its_own_evaluations():
+    """MatchResult.evaluations are the match's own: a second match on the same model does not report
+    the first one's too (the model counts over its life)."""
+    m = RecipeModel(example_path("hematite_tint"), ["pigments.0.fraction=0.005:0.08"])
+    target = m.reflectance(np.array([0.021]), "ad")
+    first = match_recipe(m, target, mode="spectral").evaluations
+    second = match_recipe(m, target, mode="spectral").evaluations
+    assert second == first and sum(m.evaluations.values()) >= sum(first.values()) + sum(second.values())

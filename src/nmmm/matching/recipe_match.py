@@ -604,6 +604,7 @@ def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, m
     lo = np.array([b.lo for b in model.bounds])
     span = np.array([b.hi - b.lo for b in model.bounds])
     t0 = time.perf_counter()
+    ev0 = dict(model.evaluations)  # the model counts over its life; a result reports this match's own
 
     def phys(u):
         return lo + np.clip(u, 0, 1) * span
@@ -748,5 +749,6 @@ def match_recipe(model: RecipeModel, target_reflectance=None, target_lab=None, m
                          illuminant=canonical_illuminant(illuminant), **dict(zip(("dL", "dC", "dH"),
                                                                                  (float(v) for v in delta_lch(lab_t, c["lab"]))))))
     return MatchResult(model.values(x), best["R"], w, lab_t, best["lab"], best["de00"], dlch, mi, rms,
-                       canonical_illuminant(illuminant), mode, dict(model.evaluations), time.perf_counter() - t0, rows, se,
+                       canonical_illuminant(illuminant), mode, {k: v - ev0.get(k, 0) for k, v in model.evaluations.items()},
+                       time.perf_counter() - t0, rows, se,
                        active, model.matched_raw(x), Rt, msgs, quad, shares, total, noise)
