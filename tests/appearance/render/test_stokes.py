@@ -187,3 +187,87 @@ def test_glints_carry_the_flake_chain_and_average_to_the_statistical_term():
     ratio = [x.stokes[1][on].mean() / x.stokes[0][on].mean() for x in (st, sm)]
     assert ratio[0] < 0 and ratio[0] == pytest.approx(ratio[1], rel=0.05)
     assert np.all(degree_of_polarization(np.moveaxis(st.stokes, 0, -1)[on]) <= 1 + 1e-6)
+
+
+def _unit(v):
+    return v / np.linalg.norm(v)
+
+
+def _jones_interface(E, k_in, k_out, normal, a_s, a_p):
+    """A 3-D field vector E through an interface: s = k_in x normal, p = k x s on each side (the
+    convention of rp = -rs at normal incidence), amplitudes a_s, a_p (power factors included)."""
+    s = _unit(np.cross(k_in, normal))
+    return a_s * np.dot(E, s) * s + a_p * np.dot(E, np.cross(k_in, s)) * np.cross(k_out, s)
+
+
+def _hecht_r(n1, n2, ci):
+    ct = np.sqrt(1 - (n1 * np.sqrt(1 - ci ** 2) / n2) ** 2 + 0j)
+    return (n1 * ci - n2 * ct) / (n1 * ci + n2 * ct), (n2 * ci - n1 * ct) / (n2 * ci + n1 * ct)
+
+
+def _hecht_t(n1, n2, ci, ct):
+    f = np.sqrt(n2 * ct / (n1 * ci))
+    return 2 * n1 * ci / (n1 * ci + n2 * ct) * f, 2 * n1 * ci / (n2 * ci + n1 * ct) * f
+
+
+def _refract(k, n1, n2):  # through z = 0 (normal +z), k pointing down
+    c = -k[2]
+    r = n1 / n2
+    return _unit(r * k + (r * c - np.sqrt(1 - r * r * (1 - c * c))) * np.array([0.0, 0.0, 1.0]))
+
+
+def _jones_stokes(fields_out, x, wo):
+    """Stokes (normalised) of the incoherent sum of output fields, in the frame x, y = wo x x;
+    S3 = 2 Im(E_y E_x*) (e^{-iwt} fields: S3 > 0 rotating from x to y)."""
+    y = np.cross(wo, x)
+    S = np.zeros(4)
+    for E in fields_out:
+        ex, ey = np.dot(E, x), np.dot(E, y)
+        S += [abs(ex) ** 2 + abs(ey) ** 2, abs(ex) ** 2 - abs(ey) ** 2, 2 * (ex * np.conj(ey)).real,
+              2 * (ey * np.conj(ex)).imag]
+    return S / S[0]
+
+
+def test_flake_chain_and_microfacet_stokes_equal_a_3d_jones_calculation():
+    """The rotations between planes of incidence, checked without any Stokes algebra: unpolarized light
+    (two orthogonal 3-D field vectors) refracted into the coat, mirrored by an Al flake whose normal is
+    the binder half vector, refracted out (Hecht's amplitude formulas, Snell's law in 3-D, explicit s and
+    p unit vectors at each interface), projected on the camera frame — equals the Stokes state of
+    ``_flake_chain`` for random directions, S3 included; likewise one GGX microfacet of a rough coat
+    (normal = the half vector) against the coat term of ``_polarized_terms``."""
+    from nmmm.appearance.render.plate.stokes import _flake_chain, _polarized_terms
+    from nmmm.materials import as_material
+
+    paint = grey_metallic_paint()  # coat n = 1.5 (no dispersion), Al flakes
+    n = 1.5
+    w = np.array([450.0, 650.0])
+    nk = np.asarray(as_material(paint.flakes.optics.material).nk(w), complex)
+    rough = opaque_paint(0.3, roughness=0.2)
+    rng = np.random.default_rng(3)
+    dirs = rng.normal(size=(40, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    dirs = dirs[dirs[:, 2] > 0.25][:12]
+    wi_all, wo_all = dirs[:6], dirs[6:12]
+    ref = np.array([0.3, 0.9, 0.1])
+    xc_all = np.array([_unit(ref - np.dot(ref, v) * v) for v in wo_all])
+    got = _flake_chain(paint, w, wi_all, wo_all, xc_all)
+    got_facet = _polarized_terms(rough, w, wi_all, wo_all, xc_all, flakes=False)
+    got_facet = got_facet / got_facet[..., :1]
+    for q, (wi, wo, xc) in enumerate(zip(wi_all, wo_all, xc_all)):
+        k0 = -wi
+        e1 = _unit(np.cross(k0, [0.3, 0.5, 0.8]))
+        inputs = (e1.astype(complex), np.cross(k0, e1).astype(complex))
+        k1 = _refract(k0, 1.0, n)
+        k2 = -_refract(-wo, 1.0, n)  # the binder direction that leaves the coat along wo
+        m = _unit(-k1 + k2)
+        for j in range(w.size):
+            t_in = _hecht_t(1.0, n, wi[2], -k1[2])
+            r_fl = _hecht_r(n, nk[j], np.dot(-k1, m))
+            t_out = _hecht_t(n, 1.0, k2[2], wo[2])
+            out = [_jones_interface(_jones_interface(_jones_interface(E, k0, k1, [0, 0, 1.0], *t_in), k1, k2, m, *r_fl),
+                                    k2, wo, [0, 0, 1.0], *t_out) for E in inputs]
+            np.testing.assert_allclose(got[q, j], _jones_stokes(out, xc, wo), atol=1e-9)
+            h = _unit(wi + wo)
+            facet = [_jones_interface(E, k0, wo, h, *_hecht_r(1.0, n, np.dot(wi, h))) for E in inputs]
+            np.testing.assert_allclose(got_facet[q, j], _jones_stokes(facet, xc, wo), atol=1e-9)
+    assert np.abs(got[..., 3]).max() > 1e-3  # the metal's retardance is exercised
