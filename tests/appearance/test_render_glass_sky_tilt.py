@@ -250,3 +250,16 @@ def test_sun_and_sky_light_a_white_diffuser_with_their_stated_illuminances():
     # a white diffuser: L = (E_sun sin(elevation) + E_sky) / π
     assert lum == pytest.approx((80000.0 * 0.5 + 15000.0) / math.pi, rel=0.02)
     assert sun.direction[1] > 0 and sun.direction[2] == pytest.approx(0.5)  # behind the plate, 30° high
+
+
+def test_the_sun_lights_the_ground_of_the_sky_map_too():
+    """A grey ground under sky + sun is a Lambertian ρ lit by both: L = ρ (E_sky + E_sun sin h) / π
+    (review N: the ground ignored the sun, 5x too dark under a clear sky with a 70 000 lx sun at 40°)."""
+    from nmmm.appearance.render.plate.environment import _KM, _luminance_weight
+
+    env = cie_sky_environment(W, 12, 40.0, 90.0, illuminance_lux=10000.0, ground_reflectance=0.2, height=16,
+                              width=32, sun_normal_illuminance_lux=70000.0)
+    lum = _KM * env.radiance @ _luminance_weight(W)
+    np.testing.assert_allclose(lum[8:], 0.2 * (10000.0 + 70000.0 * math.sin(math.radians(40.0))) / math.pi, rtol=1e-9)
+    with pytest.raises(InvalidInputError, match="sun_normal_illuminance_lux"):
+        cie_sky_environment(W, 12, sun_normal_illuminance_lux=-1.0)

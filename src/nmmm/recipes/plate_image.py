@@ -133,7 +133,7 @@ def _scene_of(recipe, w, size_mm):
         from nmmm.appearance.render.cie_sky import cie_sun
 
         env = cie_sky_environment(w, im.sky_type, im.sky_sun_elevation_deg, 90.0, im.sky_cct_k,
-                                  im.sky_illuminance_lux, im.wall_reflectance)
+                                  im.sky_illuminance_lux, im.wall_reflectance, sun_normal_illuminance_lux=im.sky_sun_lux)
         sun = [cie_sun(w, im.sky_sun_elevation_deg, 90.0, im.sky_sun_lux, im.sky_cct_k)] if im.sky_sun_lux > 0 else []
         return sun, env, None, True
     if scene == "point":

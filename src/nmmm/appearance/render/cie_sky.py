@@ -11,8 +11,9 @@
   daylight of a stated correlated colour temperature) as a
   :class:`~nmmm.appearance.render.LatLongEnvironment` (z up, the plate frame; φ from +x towards
   +y), scaled so that the sky gives ``illuminance_lux`` on a horizontal plane; below the
-  horizon a grey ground of reflectance ``ground_reflectance`` lit by that illuminance
-  (ρ E / π). The sun's disc itself is not in the map; its circumsolar aureole is.
+  horizon a grey ground of reflectance ``ground_reflectance`` lit by that illuminance and by
+  the sun's, if stated (ρ (E + E_sun sin h) / π). The sun's disc itself is not in the map; its
+  circumsolar aureole is.
 - :func:`cie_sun` — the sun's disc as a :class:`~nmmm.appearance.render.DirectionalLight` (0.53°,
   the same daylight spectrum) giving a stated illuminance normal to its rays.
 
@@ -100,10 +101,13 @@ def _daylight(w, cct_k):
 
 def cie_sky_environment(wavelength_nm, sky_type: int = 12, sun_elevation_deg: float = 45.0,
                         sun_azimuth_deg: float = 90.0, cct_k=None, illuminance_lux: float = 10000.0,
-                        ground_reflectance: float = 0.2, height: int = 64, width: int = 128):
+                        ground_reflectance: float = 0.2, height: int = 64, width: int = 128,
+                        sun_normal_illuminance_lux: float = 0.0):
     """The CIE standard general sky ``sky_type`` as a spectral lat-long map on ``wavelength_nm``
     (see the module docstring); the sun at ``sun_elevation_deg`` above the horizon and azimuth
-    ``sun_azimuth_deg`` (from +x towards +y; 90 puts it behind a plate seen from −y)."""
+    ``sun_azimuth_deg`` (from +x towards +y; 90 puts it behind a plate seen from −y).
+    ``sun_normal_illuminance_lux``: the sun of :func:`cie_sun` that goes with the sky (0: none); it
+    lights the ground too, ρ (E_sky + E_sun sin h) / π (the disc itself is not in the map)."""
     from nmmm.appearance.render.lights import LatLongEnvironment
     from nmmm.appearance.render.plate.environment import _luminance_weight
 
@@ -115,6 +119,9 @@ def cie_sky_environment(wavelength_nm, sky_type: int = 12, sun_elevation_deg: fl
     E = float(check_finite(illuminance_lux, "sky illuminance_lux"))
     if E <= 0:
         raise InvalidInputError(f"sky illuminance_lux must be > 0, got {E!r}")
+    E_sun = float(check_finite(sun_normal_illuminance_lux, "sun_normal_illuminance_lux"))
+    if E_sun < 0:
+        raise InvalidInputError(f"sun_normal_illuminance_lux must be >= 0 (0: no sun), got {E_sun!r}")
     rho = float(check_finite(ground_reflectance, "ground_reflectance"))
     if not 0 <= rho < 1:
         raise InvalidInputError(f"ground_reflectance must lie in [0, 1), got {rho!r}")
@@ -133,7 +140,7 @@ def cie_sky_environment(wavelength_nm, sky_type: int = 12, sun_elevation_deg: fl
     S = S / (_KM * float(_luminance_weight(w) @ S))  # 1 cd/m² of this spectrum
     lum = np.empty((h, wd))
     lum[up] = Lz * rel
-    lum[~up] = rho * E / np.pi
+    lum[~up] = rho * (E + E_sun * np.sin(np.radians(el))) / np.pi  # the ground under the sky and the sun
     name = f"CIE sky type {int(sky_type)}, sun {el:g} deg, {'D65' if cct_k is None else f'{float(cct_k):g} K'}, {E:g} lx"
     return LatLongEnvironment(w, lum[..., None] * S[None, None, :], name=name)
 
