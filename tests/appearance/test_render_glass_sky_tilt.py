@@ -263,3 +263,27 @@ def test_the_sun_lights_the_ground_of_the_sky_map_too():
     np.testing.assert_allclose(lum[8:], 0.2 * (10000.0 + 70000.0 * math.sin(math.radians(40.0))) / math.pi, rtol=1e-9)
     with pytest.raises(InvalidInputError, match="sun_normal_illuminance_lux"):
         cie_sky_environment(W, 12, sun_normal_illuminance_lux=-1.0)
+
+
+# CIE S 011/E:2003 Table 1, as tabulated by Kittler, Darula & Perez (1998) and by Li et al., Energy 100 (2016)
+# (doi:10.1016/j.energy.2016.02.054; also the 15_CIE_standard_skies.csv of the R package rcaiman): (a, b, c, d, e)
+_S011 = [(4, -0.7, 0, -1, 0), (4, -0.7, 2, -1.5, 0.15), (1.1, -0.8, 0, -1, 0), (1.1, -0.8, 2, -1.5, 0.15),
+         (0, -1, 0, -1, 0), (0, -1, 2, -1.5, 0.15), (0, -1, 5, -2.5, 0.3), (0, -1, 10, -3, 0.45),
+         (-1, -0.55, 2, -1.5, 0.15), (-1, -0.55, 5, -2.5, 0.3), (-1, -0.55, 10, -3, 0.45), (-1, -0.32, 10, -3, 0.45),
+         (-1, -0.32, 16, -3, 0.3), (-1, -0.15, 16, -3, 0.3), (-1, -0.15, 24, -2.8, 0.15)]
+
+
+def test_all_fifteen_sky_types_are_the_standard_rows_and_published_values():
+    """Every one of the 15 types against the standard's rows written out above (review N: the
+    formula test covered 4), and two published values of colour-science's independent
+    implementation (colour.phenomena.sky_luminance_distribution_CIE2003 docstring, colour 0.4.7+):
+    type 1 and type 12 at Z = 45°, 180° from the sun's azimuth, sun at Zs = 30°."""
+    from nmmm.appearance.render.cie_sky import CIE_SKY_TYPES
+
+    pts = [(0.0, 0.0), (20.0, 45.0), (50.0, 200.0), (85.0, 90.0), (70.0, 300.0)]
+    for t, row in enumerate(_S011, start=1):
+        np.testing.assert_allclose(CIE_SKY_TYPES[t], row, rtol=0, atol=0)
+        got = cie_sky_relative_luminance([p[0] for p in pts], [p[1] for p in pts], 35.0, 90.0, t)
+        np.testing.assert_allclose(got, [_kittler(Z, az, 35.0, 90.0, *row) for Z, az in pts], rtol=1e-10)
+    assert cie_sky_relative_luminance(45.0, 180.0, 30.0, 0.0, 1) == pytest.approx(0.8325846, abs=1e-7)
+    assert cie_sky_relative_luminance(45.0, 180.0, 30.0, 0.0, 12) == pytest.approx(0.4544524, abs=1e-7)
