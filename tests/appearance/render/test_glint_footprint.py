@@ -194,10 +194,6 @@ def test_glints_of_a_pigmented_coat_are_its_statistical_brdf(red_metallic_plate)
     assert pooled[0] > 3 * pooled[2]
 
 
-@pytest.mark.xfail(strict=True, reason="PaintedPlate.smooth_brdf (render/plate/scene.py) replaces the paint's flake "
-                   "layer by FlakeList.to_flake_layer(), which drops depth_range (and surface_roughness, "
-                   "edge_fraction): the red metallic's flakes lie in the bottom third (0.66-1) of the basecoat, "
-                   "the plate's smooth BRDF puts them through the whole coat (reported to helpers E/H)")
 def test_plate_smooth_brdf_is_the_paints(red_metallic_plate):
     """The plate image's statistical BRDF is the recipe's (the multi-angle colour's)."""
     plate = red_metallic_plate

@@ -6,6 +6,7 @@ deposit model's cell (:func:`deposit_metallic_plate`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -78,7 +79,12 @@ class PaintedPlate:
                 raise InvalidInputError("flakes must be a FlakeList (the unit cell tiled over the plate) or None")
             if not isinstance(self.brdf, PaintBRDF):
                 raise InvalidInputError("discrete flakes need a PaintBRDF (its clear coat refracts light to them)")
-            smooth = self.brdf.with_(flakes=self.flakes.to_flake_layer())
+            layer = self.flakes.to_flake_layer()
+            if self.brdf.flakes is not None:  # keep the paint's depth band, face roughness and edges
+                pf = self.brdf.flakes
+                layer = dataclasses.replace(layer, depth_range=pf.depth_range,
+                                            surface_roughness=pf.surface_roughness, edge_fraction=pf.edge_fraction)
+            smooth = self.brdf.with_(flakes=layer)
         object.__setattr__(self, "_smooth", smooth)
 
     def __repr__(self):
