@@ -24,7 +24,8 @@ times less so.
 Session 4, 2026-12-02 (after the rank-one form of Γ: 3 forward FFTs + 1 inverse per iteration)
 -------------------------------------------------------------------------------------
 - Iteration / bare FFT pair (6 FFTs), 128³ complex64, Boolean spheres, willot2015:
-  run_all.py at load 11: 1.23 (1 thread), 1.39 (2 threads); CPU time at 1 thread, load 5-11,
+  run_all.py at load 11: 1.23 (1 thread), 1.39 (2 threads); at load 6.6: 1.34 / 1.25 (around the 1.3
+  target, not robustly below it); CPU time at 1 thread, load 5-11,
   medians of 5: 1.23-1.33 (warm-start path, x formed) — was 1.72 (1.89 in run_all). In-loop
   parts at 1 thread (ms): direction + ε 17-19, 3 FFTs 51-53, potential 12, 1 inverse FFT 18,
   stencil update 21 (bare pair 101-106).
