@@ -287,3 +287,28 @@ def test_all_fifteen_sky_types_are_the_standard_rows_and_published_values():
         np.testing.assert_allclose(got, [_kittler(Z, az, 35.0, 90.0, *row) for Z, az in pts], rtol=1e-10)
     assert cie_sky_relative_luminance(45.0, 180.0, 30.0, 0.0, 1) == pytest.approx(0.8325846, abs=1e-7)
     assert cie_sky_relative_luminance(45.0, 180.0, 30.0, 0.0, 12) == pytest.approx(0.4544524, abs=1e-7)
+
+
+def test_tilting_the_plate_keeps_the_booth_exposure():
+    """The exposure is the booth's white tile lying flat: a plate tilted away from the 45° source
+    gets darker on the display against an unchanged booth (review N: the tile tilted with the
+    plate, so at 20° the white dropped from 913 to 588 cd/m² and the booth walls showed 1.55x brighter)."""
+    from nmmm.appearance.render.plate.environment import _KM, _luminance_weight
+    from nmmm.recipes.run import compute
+    from nmmm.recipes.schema import parse_recipe
+
+    d = tomllib.load(open(EX + "hematite_paint.toml", "rb"))
+    d["spectral"] = {"start_nm": 400, "stop_nm": 700, "step_nm": 20}
+    out = {}
+    for t in (0.0, 20.0):
+        d["image"] = {"scene": "booth", "tilt_deg": t, "stereo": False, "pixels": [60, 40]}
+        res = compute(parse_recipe(d), progress=False)
+        si = res.spectral_images["view"]
+        y = _luminance_weight(si.wavelength_nm) * _KM
+        out[t] = (si.white_radiance @ y, (si.radiance[~si.on_plate] @ y).mean(), (si.radiance[si.on_plate] @ y).mean(),
+                  res.images["view"][~si.on_plate].mean(), res.images["view"][si.on_plate].mean())
+    (w0, b0, p0, db0, dp0), (w1, b1, p1, db1, dp1) = out[0.0], out[20.0]
+    assert b1 == pytest.approx(b0, rel=0.01)  # the booth seen past the plate is the same booth
+    assert w1 == pytest.approx(w0, rel=1e-9)  # so is the white tile (render_plate's own, untilted)
+    assert db1 == pytest.approx(db0, rel=0.01)  # and the display shows it alike
+    assert p1 < 0.6 * p0 and dp1 < dp0  # the plate turned away from the source is darker, on the display too

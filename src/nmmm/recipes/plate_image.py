@@ -152,6 +152,27 @@ def _scene_of(recipe, w, size_mm):
     return lights, env, back, True
 
 
+def _flat_white(lights, env, back, w):
+    """Radiance (L,) of the scene's white reference in the world frame — the light table, or a
+    white diffuser lying flat at the plate centre under ``lights`` and ``env`` (as the renderers
+    compute it for an untilted plate) — so that tilting the plate does not move the exposure."""
+    from nmmm.appearance.render.lights import LatLongEnvironment, UniformEnvironment
+    from nmmm.appearance.render.plate.renderer import _light_at
+
+    if back is not None:
+        return np.asarray(back, float).copy()
+    white = np.zeros(w.size)
+    for lt in lights:
+        _, s = _light_at(lt, np.zeros((1, 3)))
+        white += s[0] * lt.spectral(w) / np.pi
+    if isinstance(env, UniformEnvironment):
+        white += env.spectral(w)
+    elif isinstance(env, LatLongEnvironment):
+        qd, qs, qr = env.upper_quadrature(w)
+        white += (qs * qd[:, 2]) @ qr / np.pi
+    return white
+
+
 def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dict:
     """sRGB images (name -> (H, W, 3) in [0, 1]) of the ``[image]`` plate: ``"view"`` (mono)
     or ``"left eye"``/``"right eye"``; the spectral images go into ``keep``.
@@ -159,7 +180,9 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
     ``brdf`` is the paint's BRDF, or for ``[plate]`` / ``[thin_film]`` recipes the plate optics of
     :func:`recipe_specular_optics` (rendered by :func:`~nmmm.appearance.render.transmission.render_specular_plate`).
     The plate is tilted by ``[image] tilt_deg`` about its horizontal axis (the scene is turned into
-    the plate's frame, :func:`~nmmm.appearance.render.plate_tilt.tilted_scene`)."""
+    the plate's frame, :func:`~nmmm.appearance.render.plate_tilt.tilted_scene`); the exposure stays
+    the white tile lying flat in the scene (a tilted plate turned away from the source looks darker
+    against an unchanged booth)."""
     from nmmm.appearance.render import PinholeCamera, render_plate
     from nmmm.appearance.render.camera import stereo_pair
     from nmmm.appearance.render.plate_tilt import tilted_scene
@@ -175,6 +198,7 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
         cams = {"view": PinholeCamera(position_mm=tuple(centre), look_at_mm=(0.0, 0.0, 0.0), fov_deg=im.fov_deg,
                                       resolution=tuple(im.pixels))}
     named = {}
+    white = _flat_white(lights, env, back, w) if im.tilt_deg != 0 else None
     if _specular(recipe):
         from nmmm.appearance.render.transmission import render_specular_plate
 
@@ -186,6 +210,10 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
         for k, cam in cams.items():
             c, lt, e = tilted_scene(im.tilt_deg, cam, lights, env)
             named[k] = render_plate(plate, c, lights=lt, environment=e, wavelength_nm=w)
+    if white is not None:  # the exposure is the booth's white tile lying flat, not a tile tilted with the plate
+        from dataclasses import replace
+
+        named = {k: replace(v, white_radiance=white) for k, v in named.items()}
     keep.update(named)
     if tone_mapped:  # a calibrated display: the booth's white tile (or the light table) is white, highlights tone-mapped
         return {k: v.to_display("sRGB", im.exposure, "knee")[0] for k, v in named.items()}
