@@ -129,6 +129,9 @@ def test_render_plate_cli_takes_glass_and_thin_film_recipes_and_a_cie_sky(tmp_pa
     assert sky.exit_code == 0, sky.output
     bad = CliRunner().invoke(render, ["plate", str(tmp_path / "b"), "--paint", "solid", "--sky", "17"])
     assert bad.exit_code == 2 and "--sky" in bad.output
+    # review N: --sky with --booth rendered the booth and dropped the sky without a word
+    both = CliRunner().invoke(render, ["plate", str(tmp_path / "c"), "--paint", "solid", "--sky", "12", "--booth", "45"])
+    assert both.exit_code == 2 and "--sky" in both.output and "--booth" in both.output
 
 
 def test_recipe_image_in_the_viewing_booth():

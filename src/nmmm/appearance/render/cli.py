@@ -195,6 +195,8 @@ def plate_cmd(output, paint, tilt_deg, optical_depth, base, light, light_zenith_
     from nmmm.errors import NmmmError
 
     output = _output_stem(output, "plate")
+    if booth != "none" and sky_type is not None:
+        raise click.UsageError(f"--sky {sky_type} and --booth {booth} are two scenes; give one of them")
     try:
         grid = None
         if paint in PAINTS:
