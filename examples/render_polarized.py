@@ -37,10 +37,15 @@ for row, name in enumerate(("hematite_paint.toml", "grey_metallic.toml")):
     on = st.on_plate
     views = ((st.s0, "unpolarized"), (st.through_polarizer(0.0), "polarizer 0° (horizontal)"),
              (st.through_polarizer(90.0), "polarizer 90° (vertical)"))
+    # one exposure per row (all three views alike; a polarizer view is exposed for the white tile seen through
+    # the filter, StokesImage.through_polarizer): 1 (white tile = display white) unless the plate's
+    # 99th-percentile radiance exceeds white (the metallic's flake highlight in the booth: a white blob at 1)
+    top = np.percentile(st.s0.radiance[on].mean(axis=1), 99)
+    expo = float(min(1.0, 0.9 * np.mean(st.white_radiance) / max(top, 1e-9)))
     for col, (img, title) in enumerate(views):
-        rgb, stats = img.to_display("sRGB", 1.0, "knee")
+        rgb, stats = img.to_display("sRGB", expo, "knee")
         axes[row, col].imshow(rgb)
-        axes[row, col].set_title(f"{plate.brdf.name}: {title}\nplate {stats['plate_mean_cd_m2']:.1f} cd/m²", fontsize=8)
+        axes[row, col].set_title(f"{plate.brdf.name}: {title}\nplate {stats['plate_mean_cd_m2']:.1f} cd/m² (exposure {expo:.2f})", fontsize=8)
         axes[row, col].axis("off")
     im = axes[row, 3].imshow(np.where(on, dolp, np.nan), vmin=0, vmax=1, cmap="magma")
     axes[row, 3].set_title(f"degree of linear polarization (plate mean {dolp[on].mean():.2f})", fontsize=8)
