@@ -90,6 +90,14 @@ class FlakeSpec:
         model (:func:`nmmm.microstructure.flake_deposit`), degrees.
     tilt_density : optional ``(tilt_deg, density_per_sr)`` tabulated density of flake normals
         (replaces ``tilt_std_deg``; needs ``derive="volume"``).
+    face_roughness : GGX α of the flake faces (microfacets composed with the tilt,
+        :meth:`TiltDistribution.roughened`; Walter et al. 2007). Default 0.05: an ASSUMED value
+        for milled aluminium flakes (no measured α is cited here; 0 = mirror faces, ~0.1 and
+        above for ragged "cornflake" grades). It widens the near-specular lobe and lifts the
+        far-from-specular flake light, so L* keeps falling beyond 45° aspecular.
+    edge_width_nm : width w of the scattering rim round each flake; the rim fraction of the
+        light meeting a flake is f_e = 4 w / ⟨D⟩ (:func:`nmmm.appearance.flakes.edge_scatter_fraction`).
+        Default 500 nm: an ASSUMED wavelength-scale width (that function's docstring); 0 = no rims.
     """
 
     material: object = "aluminium"
@@ -100,6 +108,8 @@ class FlakeSpec:
     tilt_std_deg: float = 6.0
     tilt_density: tuple | None = None
     name: str = ""
+    face_roughness: float = 0.05
+    edge_width_nm: float = 500.0
 
     def __post_init__(self):
         _num(self.diameter_um, "flakes.diameter_um", 0.0, what=" (flake diameter, µm)")
@@ -110,6 +120,9 @@ class FlakeSpec:
         if f >= 1.0:
             raise InvalidInputError(f"flakes.fraction: must be < 1 (a volume fraction of the coat), got {f:g}")
         _num(self.tilt_std_deg, "flakes.tilt_std_deg", 0.0, 90.0, lo_open=False, what=" (degrees)")
+        _num(self.face_roughness, "flakes.face_roughness", 0.0, 1.0, lo_open=False,
+             what=" (GGX alpha of the flake faces, 0 = mirror)")
+        _num(self.edge_width_nm, "flakes.edge_width_nm", 0.0, lo_open=False, what=" (rim width, nm)")
         if self.tilt_density is not None:
             self.tilt_distribution()  # refuses a table that is not a density, naming the key
         if self.layered:
@@ -449,6 +462,13 @@ class EffectCoat:
         kw = {}
         if "depth_range" in inspect.signature(FlakeLayer).parameters:
             kw["depth_range"] = d.depth_range
+        fl = self.flakes
+        if "surface_roughness" in inspect.signature(FlakeLayer).parameters:
+            from nmmm.appearance.flakes import edge_scatter_fraction
+
+            kw["surface_roughness"] = float(fl.face_roughness)
+            w_e = float(fl.edge_width_nm)
+            kw["edge_fraction"] = edge_scatter_fraction(float(fl.diameter_um) * 1e3, w_e) if w_e > 0 else 0.0
         layer = FlakeLayer(optics, d.tilt, d.optical_depth, **kw)
         mix = self.pigment_optics(w)
         coat = ClearCoat(self.binder, self.roughness)

@@ -19,6 +19,8 @@ An effect coat **by its composition** (issue 18)::
     thickness_nm = 300
     fraction = 0.008                 # volume fraction of the basecoat
     tilt_std_deg = 6                 # orientation spread (deposit law); or tilt_density = {tilt_deg, density_per_sr}
+    face_roughness = 0.05            # GGX alpha of the flake faces (default 0.05, assumed; 0 = mirror flakes)
+    edge_width_nm = 500              # scattering rim of each flake, f_e = 4 w / D (default 500 nm, assumed; 0 = none)
     [[effect.pigments]]              # the [[pigments]] of a film: compound, fraction, size, shape
     compound = "hematite"
     fraction = 0.03
@@ -70,6 +72,8 @@ class EffectFlakes(_Strict):
     fraction: Annotated[float, Field(ge=0.0, lt=1.0, allow_inf_nan=False)]
     tilt_std_deg: Annotated[float, Field(gt=0.0, le=90.0, allow_inf_nan=False)] = 6.0
     tilt_density: TiltDensity | None = None
+    face_roughness: Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False)] = 0.05
+    edge_width_nm: NonNegative = 500.0
 
     @model_validator(mode="after")
     def _one_material(self):
@@ -165,7 +169,8 @@ def build_effect_coat(e: Effect, mats: dict, name: str = "effect coat"):
         thickness = f.thickness_nm if (f.thickness_nm is not None or f.layers is not None) else 300.0
         dens = None if f.tilt_density is None else (f.tilt_density.tilt_deg, f.tilt_density.density_per_sr)
         spec = FlakeSpec(material, f.diameter_um, f.diameter_std_um, thickness, f.fraction, f.tilt_std_deg, dens,
-                         name=f.material or "layered flake")
+                         name=f.material or "layered flake", face_roughness=f.face_roughness,
+                         edge_width_nm=f.edge_width_nm)
         sub = e.substrate_reflectance if e.substrate_reflectance is not None else e.body_reflectance
         given = e.model_fields_set
         coat = EffectCoat(spec, components(e.pigments, mats), nb, e.coat_thickness_um * 1e3, e.clear_coat_um * 1e3,
