@@ -129,7 +129,7 @@ def test_match_stopped_by_the_cap_is_warned(monkeypatch):
     target = m.reflectance(np.array([0.021, 0.15]), "ad")
     monkeypatch.setattr(rm, "_FINISH_MAX_EVALS", 2)
     with pytest.warns(UserWarning, match="stopped at its cap of 2 evaluations before converging"):
-        res = match_recipe(m, target, mode="spectral")
+        res = match_recipe(m, target, mode="spectral", km_start=False)  # (with the KM start, the centre finish rescues it)
     assert any("cap of 2" in w for w in res.warnings)
 
 
