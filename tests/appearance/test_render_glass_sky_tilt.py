@@ -299,14 +299,17 @@ def test_tilting_the_plate_keeps_the_booth_exposure():
 
     d = tomllib.load(open(EX + "hematite_paint.toml", "rb"))
     d["spectral"] = {"start_nm": 400, "stop_nm": 700, "step_nm": 20}
-    out = {}
+    runs = {}
     for t in (0.0, 20.0):
         d["image"] = {"scene": "booth", "tilt_deg": t, "stereo": False, "pixels": [60, 40]}
         res = compute(parse_recipe(d), progress=False)
-        si = res.spectral_images["view"]
+        runs[t] = (res.spectral_images["view"], res.images["view"])
+    off = ~runs[0.0][0].on_plate & ~runs[20.0][0].on_plate  # the booth seen past the plate in both views
+    out = {}
+    for t, (si, rgb) in runs.items():
         y = _luminance_weight(si.wavelength_nm) * _KM
-        out[t] = (si.white_radiance @ y, (si.radiance[~si.on_plate] @ y).mean(), (si.radiance[si.on_plate] @ y).mean(),
-                  res.images["view"][~si.on_plate].mean(), res.images["view"][si.on_plate].mean())
+        out[t] = (si.white_radiance @ y, (si.radiance[off] @ y).mean(), (si.radiance[si.on_plate] @ y).mean(),
+                  rgb[off].mean(), rgb[si.on_plate].mean())
     (w0, b0, p0, db0, dp0), (w1, b1, p1, db1, dp1) = out[0.0], out[20.0]
     assert b1 == pytest.approx(b0, rel=0.01)  # the booth seen past the plate is the same booth
     assert w1 == pytest.approx(w0, rel=1e-9)  # so is the white tile (render_plate's own, untilted)
