@@ -59,7 +59,7 @@ side. Bin averages at θi = 45° (θo 60–80°, |φo| 0–60° / 60–120° / 1
 τ = 1 MC 0.163 / 0.050 / 0.024, model without modes 0.148 / 0.055 / 0.035 (−9 %, +9 %,
 +46 %), with modes 0.163 / 0.050 / 0.025; τ = 2 MC 0.198 / 0.057 / 0.023, without
 0.172 / 0.065 / 0.043 (−13 %, +14 %, +86 %), with 0.198 / 0.058 / 0.024. The comparison
-of every bin (``test_binned_brdf_matches_mc``, 4 SE + 10 %) was ``xfail(strict=True)``
+of every bin (``test_binned_brdf_matches_mc``, then 4 SE + 10 %) was ``xfail(strict=True)``
 and now passes.
 
 Issue 18: ``trace_coat`` extends the tracer to a pigmented basecoat (pigment absorption
@@ -69,6 +69,15 @@ an exact 3-D rotation; rims scattering isotropically with probability f_e). Agai
 ``PaintBRDF(..., medium=CoatMedium(...))`` (6·10^4 photons, 0/45/70°, 450/550/650 nm): albedo
 within 0.006 for the pigment cases and 0.005 for the finite-flake cases, every bin at 45°
 within 9 % (mostly ≤ 5 %), asserted 4 SE + 0.01 and 4 SE + 10 % as above.
+
+Review O: the bins are now asserted within 4 SE + 0.1 % (``MODEL_TOL_BINS``: the model's bin
+quadrature, n_quad = 24 against 96, measured ≤ 1.4e-4) — a statistical bound at 6·10^4 photons
+(bin SE 1–5 %), where every bin of every case passes. At 6·10^5 photons (bin SE ≤ 1.6 %) the
+model error shows: largest |model − MC| / MC over the 36 bins (and bins beyond 4 SE) — flakes
+τ = 1: 2.3 % (0), τ = 2: 1.5 % (0), red-ish absorber 4.7 % (0), pigment above a flake band 5.2 %
+(2), dense forward scatterer 6.9 % (4), rough faces 4.0 % (0), rims 5.3 % (4), rough + rims +
+pigment 3.7 % (1). Those 2–4 bins are model error (quadrature excluded), recorded by the slow
+strict xfail ``test_model_error_resolved_at_6e5_photons``.
 """
 
 import numpy as np
@@ -428,7 +437,9 @@ THETA_EDGES = (0.0, 20.0, 40.0, 60.0, 80.0)
 PHI_EDGES = (0.0, 60.0, 120.0, 180.0)
 N_PHOTONS = 60_000
 MODEL_TOL_ALBEDO = 0.01  # absolute: ~3 % of these albedos (model tables and quadrature)
-MODEL_TOL_BINS = 0.10  # relative, on the bin-averaged BRDF
+# relative, on the bin-averaged BRDF: the model's own quadrature error only (bin_average n_quad = 24 against 96:
+# <= 1.4e-4 for every case of this file, review O); the rest of the allowance is statistical, N_SE standard errors
+MODEL_TOL_BINS = 1e-3
 N_SE = 4.0
 
 
@@ -533,7 +544,7 @@ if __name__ == "__main__":  # the comparison table
 @pytest.mark.parametrize("tau", [1.0, 2.0])
 def test_binned_brdf_near_normal_matches_mc(traces, tau):
     """Outgoing bins within 20° of the normal (θi = 45°), where the azimuth-free shape of
-    the multiple lobe matters least: within 4 SE + 10 % (measured ≤ 9 %)."""
+    the multiple lobe matters least: within 4 SE + quadrature (MODEL_TOL_BINS)."""
     r = traces[tau, 45.0]
     b = _paint(tau).bin_average(WAVELENGTHS, _wi(45.0), THETA_EDGES[:2], PHI_EDGES, n_quad=24)
     tol = N_SE * r["bins_se"][:1] + MODEL_TOL_BINS * r["bins"][:1]
@@ -605,7 +616,7 @@ def test_pigmented_coat_albedo_and_single_terms_match_mc(pigment_traces, case):
 @pytest.mark.parametrize("case", list(PIGMENT_CASES))
 def test_pigmented_coat_binned_brdf_matches_mc(pigment_traces, case):
     """Every reported bin at θi = 45° (θo 0–80°, |φo| 0–180°, three wavelengths) within
-    4 SE + 10 %, as for the flakes alone (measured ≤ 9 %, mostly ≤ 5 %)."""
+    4 SE + quadrature (MODEL_TOL_BINS), as for the flakes alone (module docstring: the model error at 6e5 photons)."""
     r = pigment_traces[case, 45.0]
     b = _pigmented_paint(case).bin_average(WAVELENGTHS, _wi(45.0), THETA_EDGES, PHI_EDGES, n_quad=24)
     tol = N_SE * r["bins_se"] + MODEL_TOL_BINS * r["bins"]
@@ -625,7 +636,7 @@ FINITE_CASES = {
 @pytest.mark.parametrize("case", list(FINITE_CASES))
 def test_finite_flakes_match_mc(setup, case):
     """Albedo at 0/45/70° within 4 SE + 0.01 (measured ≤ 0.005) and every bin at 45° within
-    4 SE + 10 % (measured ≤ 6 %) for flakes with rough faces and scattering rims."""
+    4 SE + quadrature (MODEL_TOL_BINS) for flakes with rough faces and scattering rims."""
     from nmmm.appearance.brdf import ClearCoat, CoatMedium, PaintBRDF
     from nmmm.appearance.flakes import FlakeLayer
 
@@ -647,3 +658,32 @@ def test_finite_flakes_match_mc(setup, case):
             b = paint.bin_average(WAVELENGTHS, _wi(45.0), THETA_EDGES, PHI_EDGES, n_quad=24)
             tol = N_SE * r["bins_se"] + MODEL_TOL_BINS * r["bins"]
             assert np.all(np.abs(b - r["bins"]) < tol), (case, b[..., 1], r["bins"][..., 1])
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="model error of 5-7 % in a few bins at 45 deg incidence (cause not located; not the bin "
+                   "quadrature): beyond 4 SE once the tracer's SE is ~1 % (review O)")
+@pytest.mark.parametrize("case", ["dense forward scatterer", "rims (edge fraction 0.15)"])
+def test_model_error_resolved_at_6e5_photons(setup, case):
+    """The binned comparison at 10x the photons (bin SE <= 1.6 %): the model is outside 4 SE + quadrature in
+    4 of the 36 bins of each of these two cases (6.9 % and 5.3 % at most). Passes once the model is right."""
+    from nmmm.appearance.brdf import ClearCoat, PaintBRDF
+    from nmmm.appearance.flakes import FlakeLayer
+
+    nk, tilt = setup
+    n = 600_000
+    if case in PIGMENT_CASES:
+        ka, ks, g, band, tau = PIGMENT_CASES[case]
+        r = trace_coat(45.0, tau, nk, tilt, np.asarray(ka), ks, g, band, n_photons=n, theta_edges_deg=THETA_EDGES,
+                       phi_edges_deg=PHI_EDGES, seed=164)
+        paint = _pigmented_paint(case)
+    else:
+        sig, alpha, fe, tau, _ = FINITE_CASES[case]
+        r = trace_coat(45.0, tau, nk, gaussian_tilt(sig), np.zeros(3), 0.0, 0.0, n_photons=n,
+                       theta_edges_deg=THETA_EDGES, phi_edges_deg=PHI_EDGES, seed=350, surface_roughness=alpha,
+                       edge_fraction=fe)
+        paint = PaintBRDF(ClearCoat(N_COAT), RHO, FlakeLayer(aluminium_flakes(), gaussian_tilt(sig), tau,
+                                                             surface_roughness=alpha, edge_fraction=fe))
+    b = paint.bin_average(WAVELENGTHS, _wi(45.0), THETA_EDGES, PHI_EDGES, n_quad=24)
+    tol = N_SE * r["bins_se"] + MODEL_TOL_BINS * r["bins"]
+    assert np.all(np.abs(b - r["bins"]) < tol), (case, np.round((b - r["bins"]) / r["bins_se"], 1)[..., 1])
