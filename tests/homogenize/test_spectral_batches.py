@@ -55,3 +55,23 @@ def test_refuses_a_single_wavelength_and_fields(client):
     with pytest.raises(InvalidInputError, match="return_fields"):
         fft_permittivity_spectrum(lab, {0: 2.25, 1: np.array([-50 + 20j, -40 + 5j])}, client=client,
                                   return_fields=True)
+
+
+def test_worker_warnings_and_errors_reach_the_caller():
+    """A worker's warnings (here: the cell is not periodic) are warned in the caller once, not left in
+    the worker's log; a worker's error is raised in the caller with its chunk named (review Q). The
+    default local cluster of worker processes, closed afterwards."""
+    x, y, z = np.indices((12, 12, 12))
+    lab = ((x - 6) ** 2 + (y - 6) ** 2 + z ** 2 < 25).astype(int)  # a sphere cut by the z seam, not wrapped
+    eps = {0: 2.25, 1: np.linspace(-20 + 5j, -10 + 2j, 4)}
+    from nmmm.homogenize.validity import PeriodicityWarning
+
+    with pytest.warns(PeriodicityWarning, match="does not look periodic") as rec:
+        r = fft_permittivity_spectrum(lab, eps, directions=[0], n_workers=2)
+    assert len([w for w in rec if issubclass(w.category, PeriodicityWarning)]) == 1
+    assert r.tensor.shape == (4, 3, 3)
+    from nmmm.errors import ConvergenceError
+
+    with pytest.raises(ConvergenceError) as exc:  # its "wavelength index" counts within the chunk: named
+        fft_permittivity_spectrum(lab, eps, directions=[0], n_workers=2, maxiter=1, fallback=False)
+    assert any("in the Dask task of wavelengths" in n for n in getattr(exc.value, "__notes__", []))

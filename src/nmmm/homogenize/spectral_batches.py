@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import time
 import uuid
+import warnings
 
 import numpy as np
 
@@ -39,8 +40,18 @@ def _solve_chunk(labels, eps_chunk, lo, hi, wavelength_nm, kwargs):
 
     t = time.perf_counter()
     w = None if wavelength_nm is None else np.asarray(wavelength_nm)[lo:hi]
-    r = fft_permittivity(labels, eps_chunk, wavelength_nm=w, progress=False, **kwargs)
-    return lo, hi, r, time.perf_counter() - t
+    # a worker's warnings (periodicity, quasi-static validity, solver fallbacks) would stay in its
+    # log: record them and let the caller warn
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            r = fft_permittivity(labels, eps_chunk, wavelength_nm=w, progress=False, **kwargs)
+        except Exception as exc:  # travels to the caller with the chunk named
+            if hasattr(exc, "add_note"):
+                exc.add_note(f"in the Dask task of wavelengths {lo}..{hi - 1} (fft_permittivity_spectrum)")
+            raise
+    found = [(c.category, str(c.message)) for c in caught]
+    return lo, hi, r, time.perf_counter() - t, found
 
 
 def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str | None = None,
@@ -56,7 +67,8 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
         (arrays of one length, or Materials with ``wavelength_nm``).
     scheduler : str, optional
         ``"tcp://HOST:8786"`` of a running Dask scheduler; None: a ``LocalCluster`` of
-        ``n_workers`` single-threaded worker processes, closed afterwards.
+        ``n_workers`` single-threaded worker processes, closed afterwards (in a script, call under
+        ``if __name__ == "__main__":``: the worker processes import the main module again).
     n_workers : int
         Workers of the local cluster.
     client : dask.distributed.Client, optional
@@ -71,7 +83,10 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
     Returns
     -------
     FFTHomogenization
-        As from one call, with ``metadata["chunks"]``: per chunk (first, last + 1, seconds).
+        As from one call, with ``metadata["chunks"]``: per chunk (first, last + 1, seconds). The
+        workers' warnings are warned here (each once); a worker's error is raised here with a note
+        naming its chunk (its "wavelength index" counts within the chunk). A failed chunk fails the
+        call: nothing is kept for a restart.
     """
     from nmmm.homogenize.fft import FFTHomogenization, _as_label_array, _compact_labels, _eps_table
 
@@ -105,8 +120,14 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
             else:
                 import logging
 
-                own_cluster = LocalCluster(n_workers=int(n_workers), threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.ERROR)
+                try:
+                    own_cluster = LocalCluster(n_workers=int(n_workers), threads_per_worker=1, processes=True,
+                                               dashboard_address=None, silence_logs=logging.ERROR)
+                except RuntimeError as exc:
+                    raise InvalidInputError(
+                        f"the local Dask cluster's {int(n_workers)} worker processes did not start ({exc}); in a "
+                        "script, call fft_permittivity_spectrum under 'if __name__ == \"__main__\":' (worker "
+                        "processes import the main module again), or pass client= / scheduler=") from exc
                 client = own_client = Client(own_cluster)
         k = n_chunks or max(1, len(client.scheduler_info().get("workers", {})) or int(n_workers))
         bounds = _chunk_bounds(nw, k)
@@ -124,8 +145,15 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
         if own_cluster is not None:
             own_cluster.close()
     rs = [p[2] for p in parts]
+    seen = set()
+    for lo, hi, _, _, found in parts:
+        for category, message in found:
+            if (category, message) not in seen:  # each chunk repeats the cell's own warnings: once
+                seen.add((category, message))
+                warnings.warn(f"{message} (first seen in the Dask task of wavelengths {lo}..{hi - 1})", category,
+                              stacklevel=2)
     switches = []
-    for lo, _, r, _ in parts:
+    for lo, _, r, _, _ in parts:
         for s in r.switches:
             s = dict(s)
             if "wavelength_index" in s:
@@ -135,7 +163,7 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
             switches.append(s)
     meta = dict(rs[0].metadata)
     meta["green_used"] = np.concatenate([r.metadata["green_used"] for r in rs])
-    meta["chunks"] = [(lo, hi, sec) for lo, hi, _, sec in parts]
+    meta["chunks"] = [(lo, hi, sec) for lo, hi, _, sec, _ in parts]
     return FFTHomogenization(
         tensor=np.concatenate([r.tensor for r in rs]),
         iterations=np.concatenate([r.iterations for r in rs]),
