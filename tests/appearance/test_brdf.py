@@ -514,3 +514,29 @@ def test_edge_scatter_fraction_and_bad_input():
         FlakeLayer(_PerfectMirror(), gaussian_tilt(10), 1.0, edge_fraction=1.0)
     with pytest.raises(InvalidInputError, match="surface_roughness .* must lie in"):
         FlakeLayer(_PerfectMirror(), gaussian_tilt(10), 1.0, surface_roughness=-0.1)
+
+
+@pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 80.0])
+def test_white_furnace_rough_rim_flakes_in_a_scattering_band(theta):
+    """Everything the shipped effect recipes switch on at once (review O): rough faces, rims, a flake depth band and a
+    scattering (non-absorbing) pigment, lossless flakes over a white substrate: all light comes back."""
+    p = PaintBRDF(ClearCoat(1.5, 0.15), 1.0, FlakeLayer(_PerfectMirror(), gaussian_tilt(8), 1.5, (0.2, 0.9),
+                                                       surface_roughness=0.05, edge_fraction=0.1),
+                  medium=_medium(mu_s=1e-4, g=0.5))
+    assert np.allclose(hemispherical_albedo(p, _dir(theta, 20.0)), 1.0, atol=3e-3)
+
+
+def test_shipped_red_metallic_reciprocity():
+    """The red metallic as a user gets it (EffectCoat from the shipped recipe: hematite medium, flake band, rough faces,
+    rims): f(wi, wo) = f(wo, wi) to 1e-10 on random pairs (review O)."""
+    from nmmm.recipes.run import _effect_coat
+    from nmmm.recipes.schema import example_path, load_recipe
+
+    rec = load_recipe(example_path("red_metallic"))
+    paint, _ = _effect_coat(rec, w=W).brdf(W)
+    assert paint.medium is not None and paint.flakes.surface_roughness > 0 and paint.flakes.edge_fraction > 0
+    rng = np.random.default_rng(11)
+    v = rng.normal(size=(2, 400, 3))
+    v[..., 2] = np.abs(v[..., 2])
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    assert np.allclose(paint(W, v[0], v[1]), paint(W, v[1], v[0]), rtol=1e-10, atol=1e-14)
