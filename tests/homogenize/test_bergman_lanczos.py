@@ -43,3 +43,14 @@ def test_needs_two_phases():
     lab[1] = 2
     with pytest.raises(InvalidInputError, match="two phases"):
         two_phase_spectrum(lab, {0: 1.0, 1: 2.0, 2: 3.0})
+
+
+@pytest.mark.parametrize("kw,key", [({"directions": [3]}, "directions"), ({"directions": [-1]}, "directions"),
+                                    ({"tol": 0.0}, "tol"), ({"tol": 2.0}, "tol"), ({"maxiter": 0}, "maxiter")])
+def test_bad_settings_are_refused_by_name(kw, key):
+    """As fft_permittivity refuses them (review Q: directions=[3] raised IndexError, [-1] ran e2, tol=2
+    returned the one-step answer)."""
+    lab = np.zeros((4, 4, 4), dtype=int)
+    lab[:, :, :2] = 1
+    with pytest.raises(InvalidInputError, match=key):
+        two_phase_spectrum(lab, {0: 2.25, 1: np.array([-50 + 20j, -10 + 1j])}, workers=1, **kw)

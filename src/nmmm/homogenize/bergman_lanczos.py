@@ -78,6 +78,12 @@ def two_phase_spectrum(labels, eps, *, green: str = "willot2015", directions=Non
     table, scalar = _eps_table(values, eps, wavelength_nm)
     d = arr.ndim
     dirs = tuple(range(d)) if directions is None else tuple(int(j) for j in directions)
+    if not dirs or any(j < 0 or j >= d for j in dirs):
+        raise InvalidInputError(f"directions must be axes in 0..{d - 1}, got {directions!r}")
+    if not (0 < tol < 1):
+        raise InvalidInputError(f"tol must lie in (0, 1) (relative residual per wavelength), got {tol}")
+    if isinstance(maxiter, bool) or not isinstance(maxiter, (int, np.integer)) or maxiter < 1:
+        raise InvalidInputError(f"maxiter must be a positive integer (Lanczos steps per loading), got {maxiter!r}")
     ea, eb = table[:, 0], table[:, 1]
     delta = eb - ea
     homog = np.abs(delta) <= 1e-14 * np.maximum(np.abs(ea), 1e-300)
