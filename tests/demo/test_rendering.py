@@ -12,3 +12,33 @@ def test_demo_hook(tmp_path):
     assert all((tmp_path / f.split("/")[-1]).exists() for f in r["figures"])
     assert r["tables"]["render"]["shared_glint_fraction"] < 0.3
     assert np.isfinite(r["tables"]["render"]["seconds"])
+
+
+def test_demo_grey_metallic_is_the_recipes_paint():
+    """Issue 18 item 2 (one model everywhere): the demo's grey metallic plate is the shipped
+    grey_metallic recipe's coat — its statistical BRDF gives the recipe's own multi-angle
+    reflectance factors (computed by the recipe runner, images off), and its glints come from the
+    recipe coat's deposit cell (flake density = the derived layer's)."""
+    from nmmm.demo.rendering import grey_metallic_recipe_plate
+    from nmmm.recipes.run import compute
+    from nmmm.recipes.schema import example_path, parse_recipe, read_toml
+
+    data, _, base = read_toml(example_path("grey_metallic"))
+    data = {k: v for k, v in dict(data).items() if k != "image"}
+    rec = parse_recipe(data, base_dir=base)
+    res = compute(rec, progress=False)
+    w = np.asarray(res.wavelength_nm, float)
+    plate, coat = grey_metallic_recipe_plate(w)
+    th_i = np.radians(rec.viewing.illumination_deg)
+    for a in rec.viewing.aspecular_deg:
+        th_v = th_i - np.radians(a)
+        wi = np.array([[-np.sin(th_i), 0.0, np.cos(th_i)]])
+        wo = np.array([[np.sin(th_v), 0.0, np.cos(th_v)]])
+        got = np.pi * np.asarray(plate.smooth_brdf.evaluate(w, wi, wo), float)[0]
+        want = np.asarray(res.spectra[f"reflectance factor (aspecular {a:g}°)"], float)
+        np.testing.assert_allclose(got, want, rtol=1e-9, err_msg=f"aspecular {a}")
+    d = coat.derived()
+    cw, ch = plate.cell_mm
+    assert len(plate.flakes) / (cw * ch) == pytest.approx(d.number_density_per_mm2, rel=1e-6)
+    assert plate.size_mm == (150.0, 100.0)
+    assert d.optical_depth < 1.0  # not the demo's former seed_metallic_plate (optical depth 2)

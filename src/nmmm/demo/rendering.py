@@ -1,8 +1,13 @@
 """Worked example: the seed's grey metallic plate in a viewing booth (mono, near/far, stereo),
 and the plate image of every shipped paint recipe, on a calibrated display.
 
-- :func:`demo` — the demo hook (``nmmm demo``): renders the 15 cm × 10 cm grey metallic
-  plate (332 × 240 flake unit cells) in a grey booth lit by a D65 source at 45° behind the
+- :func:`grey_metallic_recipe_plate` — the plate of the shipped ``grey_metallic`` recipe: the
+  :class:`~nmmm.appearance.effect_coat.EffectCoat` its ``[effect]`` builds (the recipe loader's
+  :func:`~nmmm.recipes.effect_schema.build_effect_coat`), whose statistical BRDF and deposit
+  :class:`~nmmm.appearance.flakes.FlakeList` (glints) are the recipe's multi-angle colour and flakes:
+  the demo's grey metallic and the recipe are one paint.
+- :func:`demo` — the demo hook (``nmmm demo``): renders that 15 cm × 10 cm grey metallic
+  plate (334 × 223 flake unit cells of 450 µm) in a grey booth lit by a D65 source at 45° behind the
   plate, seen from 40 cm at 30° from the normal (the recipes' eye), so that the source's
   mirror point falls just beyond the back edge: the plate runs from the near-specular
   "face" at the back (aspecular ≈ 5°) to the "flop" at the front (≈ 25°). The same view at
@@ -22,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["demo", "source_spread_deg"]
+__all__ = ["demo", "grey_metallic_recipe_plate", "source_spread_deg"]
 
 #: the eye: 35° from the plate normal, on the viewer's side (−y); with the booth's 45° source
 #: at 50 cm the coat's mirror image of the source falls on the plate's back edge
@@ -43,6 +48,23 @@ def source_spread_deg(booth) -> float:
     sphere (angular radius a = asin(r/d)) as a uniform disc of solid angle π a²; the
     Gaussian lobe with the same effective solid angle 1/∫g² = 4π σ² has σ = a/2."""
     return float(np.degrees(np.arcsin(booth.source_radius_mm / booth.source_distance_mm)) / 2)
+
+
+def grey_metallic_recipe_plate(wavelength_nm=None, recipe: str = "grey_metallic"):
+    """``(PaintedPlate, EffectCoat)`` of the shipped effect recipe ``recipe``: the coat its ``[effect]``
+    builds through the recipe loader, its statistical BRDF on ``wavelength_nm`` (default the
+    renderer's grid) and the flakes of its deposit cell tiled over the recipe's ``[image] plate_cm``."""
+    from nmmm.appearance.render import PaintedPlate, default_wavelengths
+    from nmmm.recipes.effect_schema import build_effect_coat
+    from nmmm.recipes.run import build_materials
+    from nmmm.recipes.schema import example_path, load_recipe
+
+    w = default_wavelengths() if wavelength_nm is None else np.asarray(wavelength_nm, float)
+    rec = load_recipe(example_path(recipe))
+    coat = build_effect_coat(rec.effect, build_materials(rec, w, progress=False), name=rec.name)
+    paint, flakes = coat.brdf(w)
+    size = (150.0, 100.0) if rec.image is None else (rec.image.plate_cm[0] * 10.0, rec.image.plate_cm[1] * 10.0)
+    return PaintedPlate(paint, flakes, size), coat
 
 
 def _band_stats(img, exposure=1.0, bands=4):
@@ -159,15 +181,15 @@ def demo(output_dir, resolution=(960, 640), small_resolution=(480, 320), recipes
         default_wavelengths,
         render_plate,
         render_stereo_plate,
-        seed_metallic_plate,
     )
 
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    plate = seed_metallic_plate()
-    booth = ViewingBooth(source="45")
     w = default_wavelengths()
+    plate, coat = grey_metallic_recipe_plate(w)  # the recipe's own paint (issue 18 item 2: one model everywhere)
+    derived = coat.derived()
+    booth = ViewingBooth(source="45")
     scene = dict(booth.scene(plate, w), wavelength_nm=w)
     light = scene["lights"][0]
     spread = source_spread_deg(booth)
@@ -260,8 +282,10 @@ def demo(output_dir, resolution=(960, 640), small_resolution=(480, 320), recipes
     elapsed = time.perf_counter() - t0
     v = {k: rows[len(rows) // 2] for k, rows in variance.items()}
     text = (
-        f"Grey metallic plate {plate.size_mm[0]:.1f} x {plate.size_mm[1]:.1f} mm, {plate.cells[0]} x {plate.cells[1]} "
-        f"unit cells of 450 um with {len(plate.flakes)} Al flakes each, in a grey booth (walls 0.2) under a D65 "
+        f"Grey metallic plate of the shipped recipe grey_metallic.toml (the same EffectCoat, statistical BRDF and deposit "
+        f"flakes as the recipe's multi-angle colour: optical depth {derived.optical_depth:.3g}, mean tilt "
+        f"{derived.mean_tilt_deg:.2f} deg), {plate.size_mm[0]:.1f} x {plate.size_mm[1]:.1f} mm, {plate.cells[0]} x "
+        f"{plate.cells[1]} unit cells of {plate.cell_mm[0] * 1e3:.0f} um with {len(plate.flakes)} Al flakes each, in a grey booth (walls 0.2) under a D65 "
         f"source at 45 deg, 2000 lx, seen at {VIEW_TILT_DEG:g} deg from 40 cm ({resolution[0]}x{resolution[1]}, "
         f"{t_mono:.1f} s for the three views; glint lobe sigma {spread:.2f} deg, the source's solid angle): the clear "
         "coat mirrors the source at the back edge of the plate, the plate is brightest there (near-specular face) "
