@@ -156,3 +156,51 @@ def test_effect_recipe_in_the_booth_has_glints():
     raw["image"].update({"pixels": [36, 24], "scene": "booth", "stereo": False, "renderer": "auto"})
     res = compute(parse_recipe(raw, base_dir=p.parent), progress=False)
     assert res.spectral_images["view"].metadata["n_glints"] > 0 and res.images["view"].shape == (24, 36, 3)
+
+
+def test_booth_view_shows_face_and_flop():
+    """The recipe plate image's default eye (plate_image.VIEW_TILT_DEG) in the 45° booth: the
+    aspecular range it records in the image metadata equals the one computed from the plate's
+    own points (a grid over the 15 cm × 10 cm plate, eye and source positions, no camera rays),
+    and spans the near-specular face (≤ 15°) and the flop (≥ 30°) — at the former 30° eye the
+    whole plate lay 5–25° off specular and a grey metallic rendered nearly white (review M)."""
+    from nmmm.appearance.render import ViewingBooth
+    from nmmm.recipes.plate_image import VIEW_TILT_DEG
+    from nmmm.recipes.run import compute
+
+    res = compute(_hematite({"stereo": False, "pixels": [60, 40], "scene": "booth"}), progress=False)
+    img = res.spectral_images["view"]
+    lo, med, hi = img.metadata["aspecular_deg"]
+    t = np.radians(VIEW_TILT_DEG)
+    eye = np.array([0.0, -400.0 * np.sin(t), 400.0 * np.cos(t)])
+    src = np.asarray(ViewingBooth(source="45").lights()[0].position_mm, float)
+    X, Y = np.meshgrid(np.linspace(-75, 75, 301), np.linspace(-50, 50, 201))
+    P = np.stack([X, Y, 0 * X], axis=-1)
+    to_eye = eye - P
+    to_src = src - P
+    # the aspecular angle: between the direction to the source and the eye's direction mirrored at z = 0
+    mirrored_eye = to_eye * np.array([-1.0, -1.0, 1.0])
+    c = np.sum(mirrored_eye * to_src, -1) / np.linalg.norm(to_eye, axis=-1) / np.linalg.norm(to_src, axis=-1)
+    a = np.degrees(np.arccos(c))
+    assert lo == pytest.approx(a.min(), abs=0.6) and hi == pytest.approx(a.max(), abs=0.6)
+    assert lo <= 15.0 and hi >= 30.0 and lo < med < hi
+    assert img.metadata["view_deg_from_normal"] == VIEW_TILT_DEG
+
+
+def test_composition_effect_plate_uses_the_coats_flakes():
+    """A composition [effect] recipe's plate image tiles its EffectCoat's own flake cell (the
+    deposit behind its statistical BRDF), not flakes redrawn at the expert optical depth."""
+    from nmmm.recipes.plate_image import recipe_painted_plate
+    from nmmm.recipes.run import _effect_brdf, _effect_coat, build_materials
+
+    rec = parse_recipe(tomllib.loads(example_path("grey_metallic").read_text()), base_dir=example_path("grey_metallic").parent)
+    w = np.arange(380.0, 781.0, 40.0)
+    mats = build_materials(rec, w, progress=False)
+    coat = _effect_coat(rec, mats, w)
+    plate = recipe_painted_plate(rec, _effect_brdf(rec, mats, w))
+    d = coat.derived()
+    fl = coat.flake_list()
+    assert len(plate.flakes) == len(fl)
+    np.testing.assert_allclose(plate.flakes.region_nm, fl.region_nm)
+    cw, ch = plate.cell_mm
+    assert len(plate.flakes) / (cw * ch) == pytest.approx(d.number_density_per_mm2, rel=1e-6)

@@ -59,9 +59,15 @@ def recipe_paint(recipe, mats, w, res):
 
 
 def _flake_cell(recipe, brdf, im):
+    """The unit cell of discrete flakes: a composition ``[effect]``'s own (its EffectCoat's deposit
+    or volume draw, the flakes of its statistical BRDF), else flakes drawn at the expert optical depth."""
     from nmmm.appearance.flakes import FlakeList
 
     e = recipe.effect
+    if e.by_composition:
+        from nmmm.recipes.run import _effect_coat
+
+        return _effect_coat(recipe).flake_list()
     cell = im.cell_um * 1e3
     d = im.flake_diameter_um * 1e3
     cv = 0.3
@@ -70,8 +76,15 @@ def _flake_cell(recipe, brdf, im):
                             diameter_cv=cv, depth_range_nm=(2e3, 18e3), n_binder=e.coat_index, rng=im.seed)
 
 
+#: the eye's angle from the plate normal (degrees, on the viewer's side). With the booth's 45° source the
+#: plate then spans about 10–36° aspecular (measured per image: ``metadata["aspecular_deg"]``), so a
+#: metallic shows its near-specular face at the back and its flop at the front; at 30° the whole plate lay
+#: 5–25° off specular, where a narrow-tilt aluminium is several times the white tile (nearly white).
+VIEW_TILT_DEG = 25.0
+
+
 def _eye_centre_mm(im):
-    view_tilt = np.radians(30.0)
+    view_tilt = np.radians(VIEW_TILT_DEG)
     return np.array([0.0, -im.distance_cm * np.sin(view_tilt), im.distance_cm * np.cos(view_tilt)]) * 10.0
 
 
@@ -173,6 +186,25 @@ def _flat_white(lights, env, back, w):
     return white
 
 
+def _aspecular_range(cam, lights):
+    """Aspecular angle (degrees, per pixel) of the first light with a
+    position or direction (the booth's source, the sun) — the angle between the view ray mirrored
+    at the plate (plate frame) and the direction to the light; None without such a light."""
+    from nmmm.appearance.sparkle_prediction import pixel_footprint_mm2
+
+    lt = next((x for x in lights if hasattr(x, "position_mm") or hasattr(x, "direction")), None)
+    if lt is None:
+        return None
+    _, P = pixel_footprint_mm2(cam)
+    wo = np.asarray(cam.position_mm, float) - P
+    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
+    m = wo * np.array([-1.0, -1.0, 1.0])  # the mirror direction of the view ray
+    wi = (np.asarray(lt.position_mm, float) - P) if hasattr(lt, "position_mm") else np.broadcast_to(
+        np.asarray(lt.direction, float), P.shape)
+    wi = wi / np.linalg.norm(wi, axis=-1, keepdims=True)
+    return np.degrees(np.arccos(np.clip(np.sum(m * wi, axis=-1), -1.0, 1.0)))
+
+
 def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dict:
     """sRGB images (name -> (H, W, 3) in [0, 1]) of the ``[image]`` plate: ``"view"`` (mono)
     or ``"left eye"``/``"right eye"``; the spectral images go into ``keep``.
@@ -199,17 +231,21 @@ def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dic
                                       resolution=tuple(im.pixels))}
     named = {}
     white = _flat_white(lights, env, back, w) if im.tilt_deg != 0 else None
-    if _specular(recipe):
-        from nmmm.appearance.render.transmission import render_specular_plate
+    plate = None if _specular(recipe) else recipe_painted_plate(recipe, brdf, flakes, im)
+    for k, cam in cams.items():
+        c, lt, e = tilted_scene(im.tilt_deg, cam, lights, env)
+        if plate is None:
+            from nmmm.appearance.render.transmission import render_specular_plate
 
-        for k, cam in cams.items():
-            c, lt, e = tilted_scene(im.tilt_deg, cam, lights, env)
-            named[k] = render_specular_plate(brdf, c, size_mm, lt, e, back, w)
-    else:
-        plate = recipe_painted_plate(recipe, brdf, flakes, im)
-        for k, cam in cams.items():
-            c, lt, e = tilted_scene(im.tilt_deg, cam, lights, env)
-            named[k] = render_plate(plate, c, lights=lt, environment=e, wavelength_nm=w)
+            img = render_specular_plate(brdf, c, size_mm, lt, e, back, w)
+        else:
+            img = render_plate(plate, c, lights=lt, environment=e, wavelength_nm=w)
+        a = _aspecular_range(c, lt)
+        if a is not None and img.on_plate.any():  # what part of the face-to-flop range the plate shows
+            a = a[img.on_plate]
+            img.metadata.update(view_deg_from_normal=VIEW_TILT_DEG, aspecular_deg=(
+                round(float(a.min()), 1), round(float(np.median(a)), 1), round(float(a.max()), 1)))
+        named[k] = img
     if white is not None:  # the exposure is the booth's white tile lying flat, not a tile tilted with the plate
         from dataclasses import replace
 
