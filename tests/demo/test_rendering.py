@@ -42,3 +42,27 @@ def test_demo_grey_metallic_is_the_recipes_paint():
     assert len(plate.flakes) / (cw * ch) == pytest.approx(d.number_density_per_mm2, rel=1e-6)
     assert plate.size_mm == (150.0, 100.0)
     assert d.optical_depth < 1.0  # not the demo's former seed_metallic_plate (optical depth 2)
+
+
+def test_demo_recipe_images_include_glass_and_thin_film(tmp_path):
+    """The demo's per-recipe images include the [plate] (glass, on its light table) and [thin_film]
+    recipes: each rendered, none skipped or failed; the ruby glass reads red-pink in transmission and
+    the TiO2/mica interference film blue in the booth (their spectra's colours: the ruby's
+    plasmon absorbs green, the film's first-order reflection peaks in the blue)."""
+    import matplotlib.image as mpimg
+
+    from nmmm.demo.rendering import _recipe_images
+
+    names = ["gold_ruby_glass_light_table", "interference_pigment"]
+    figures, table, skipped, failed = _recipe_images(tmp_path, (48, 32), names)
+    assert not skipped and not failed, (skipped, failed)
+    assert set(table) == set(names) and len(figures) == 2
+    assert table["gold_ruby_glass_light_table"]["kind"] == "glass plate"
+    assert table["gold_ruby_glass_light_table"]["scene"] == "light-table"
+    assert table["interference_pigment"]["kind"] == "thin film"
+    rgb = {n: mpimg.imread(str(tmp_path / f"render_recipe_{n}.png"))[10:22, 16:32, :3].reshape(-1, 3).mean(0)
+           for n in names}
+    r, g, b = rgb["gold_ruby_glass_light_table"]
+    assert r > g and r > 0.3
+    r, g, b = rgb["interference_pigment"]
+    assert b > r and b > g

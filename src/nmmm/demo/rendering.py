@@ -135,15 +135,19 @@ def _variance_check(plate, cam, light, spread=1.0, bands=4):
     return rows
 
 
-def _recipe_images(out, resolution):
+def _recipe_images(out, resolution, names=None):
     """Every shipped recipe's plate (mono, ``resolution``) in the booth, or in its own scene
-    (light table, sky): PNG + stats."""
+    (light table, sky): PNG + stats — paints, ``[effect]`` coats, and the ``[plate]`` (glass) and
+    ``[thin_film]`` recipes (:mod:`nmmm.recipes.plate_image`); ``names`` (stems) picks some of them."""
     from nmmm.recipes.run import compute
     from nmmm.recipes.schema import parse_recipe, read_toml
 
     examples = Path(__file__).resolve().parents[1] / "recipes" / "examples"
     figures, table, skipped, failed = [], {}, [], []
-    for path in sorted(examples.glob("*.toml")):
+    paths = sorted(examples.glob("*.toml"))
+    if names is not None:
+        paths = [p for p in paths if p.stem in set(names)]
+    for path in paths:
         data, _, base = read_toml(path)
         data = dict(data)
         im = dict(data.get("image", {}))
@@ -156,10 +160,17 @@ def _recipe_images(out, resolution):
         except Exception as exc:  # noqa: BLE001 - one recipe that fails must not lose the others' images
             failed.append(f"{path.stem} ({type(exc).__name__}: {str(exc)[:120]})")
             continue
+        if "view" not in res.spectral_images:
+            skipped.append(path.stem)
+            continue
         img = res.spectral_images["view"]
         png = img.write_png(out / f"render_recipe_{path.stem}.png", 1.0, tone_map="knee")
         figures.append(str(png))
-        table[path.stem] = _band_stats(img)
+        a = img.metadata.get("aspecular_deg")
+        table[path.stem] = {"kind": ("glass plate" if res.recipe.plate is not None else "thin film"
+                                     if res.recipe.thin_film is not None else "effect" if res.recipe.effect is not None
+                                     else "solid paint"), "scene": im["scene"], **_band_stats(img),
+                            **({"aspecular deg (min/median/max)": "/".join(f"{x:g}" for x in a)} if a else {})}
     return figures, table, skipped, failed
 
 
