@@ -176,3 +176,22 @@ def test_flake_face_roughness_and_rims_reach_the_brdf():
 def test_flake_face_roughness_and_edge_width_bad_input():
     _bad(set_key(_raw("grey_metallic"), "effect.flakes.face_roughness", 1.5), r"effect\.flakes\.face_roughness")
     _bad(set_key(_raw("grey_metallic"), "effect.flakes.edge_width_nm", -1.0), r"effect\.flakes\.edge_width_nm")
+
+
+def test_an_error_inside_the_flakes_table_is_shown_alone():
+    """effect.flakes is "aluminium" | "mica" | a table: an error inside the table is reported by its key, with
+    did-you-mean for a misspelt one, not behind "Input should be 'aluminium' or 'mica' (got {the whole table})"
+    (review O)."""
+    raw = _raw("grey_metallic")
+    raw["effect"]["flakes"]["face_roughnes"] = 0.1
+    with pytest.raises(RecipeError) as exc:
+        parse_recipe(raw)
+    msg = str(exc.value)
+    assert msg.startswith("effect.flakes.face_roughnes: unknown key (did you mean 'face_roughness'?)"), msg
+    assert "Input should be 'aluminium'" not in msg
+    raw = _raw("fe2o3_mica_pearl")
+    raw["effect"]["flakes"]["layers"][1]["thickness_nm"] = -400
+    with pytest.raises(RecipeError, match=r"^effect\.flakes\.layers\[1\]\.thickness_nm: must be a finite number > 0"):
+        parse_recipe(raw)
+    with pytest.raises(RecipeError, match=r"effect\.flakes.*Input should be 'aluminium' or 'mica'"):
+        parse_recipe({"effect": {"flakes": "silver"}})  # a string that is not one of the two keeps its message

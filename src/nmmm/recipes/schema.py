@@ -405,7 +405,7 @@ def _fields_at(model, loc):
     """Known field names of the model reached by ``loc`` (for 'did you mean')."""
     cls = model
     for p in loc[:-1]:
-        if isinstance(p, int) or cls is None:
+        if isinstance(p, int) or cls is None or str(p).startswith("function-after"):
             continue
         f = getattr(cls, "model_fields", {}).get(p)
         if f is None:
@@ -441,7 +441,13 @@ def _message(err) -> str:
 
 def _from_validation_error(exc: ValidationError, source: str) -> RecipeError:
     lines = []
-    for err in exc.errors():
+    errs = exc.errors()
+    # a table given where a union also takes a literal string (effect.flakes = "aluminium" | {...}): the
+    # table's own errors are the ones to show, not "Input should be 'aluminium' or 'mica' (got {the table})"
+    errs = [e for e in errs if not (e["type"] == "literal_error" and isinstance(e["input"], dict) and any(
+        o is not e and o["type"] != "literal_error" and tuple(o["loc"][:len(e["loc"]) - 1]) == tuple(e["loc"][:-1])
+        for o in errs))] or errs
+    for err in errs:
         loc = _loc(err["loc"])
         if err["type"] == "literal_error":
             lines.append(f"{loc}: {err['msg']} (got {err['input']!r})")
