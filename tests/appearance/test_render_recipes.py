@@ -187,20 +187,28 @@ def test_booth_view_shows_face_and_flop():
     assert img.metadata["view_deg_from_normal"] == VIEW_TILT_DEG
 
 
-def test_composition_effect_plate_uses_the_coats_flakes():
-    """A composition [effect] recipe's plate image tiles its EffectCoat's own flake cell (the
-    deposit behind its statistical BRDF), not flakes redrawn at the expert optical depth."""
-    from nmmm.recipes.plate_image import recipe_painted_plate
-    from nmmm.recipes.run import _effect_brdf, _effect_coat, build_materials
+def test_composition_effect_plate_uses_the_coats_flakes(monkeypatch):
+    """A composition [effect] recipe's plate image (the recipe runner in the booth, and
+    ``nmmm render plate --paint``) tiles its EffectCoat's own flake cell (the deposit behind its
+    statistical BRDF), not flakes redrawn at the expert optical depth."""
+    import nmmm.appearance.render as render
+    from nmmm.recipes.render_cli import plate_from_recipe_file
+    from nmmm.recipes.run import _effect_coat, compute
 
-    rec = parse_recipe(tomllib.loads(example_path("grey_metallic").read_text()), base_dir=example_path("grey_metallic").parent)
-    w = np.arange(380.0, 781.0, 40.0)
-    mats = build_materials(rec, w, progress=False)
-    coat = _effect_coat(rec, mats, w)
-    plate = recipe_painted_plate(rec, _effect_brdf(rec, mats, w))
-    d = coat.derived()
-    fl = coat.flake_list()
-    assert len(plate.flakes) == len(fl)
-    np.testing.assert_allclose(plate.flakes.region_nm, fl.region_nm)
-    cw, ch = plate.cell_mm
-    assert len(plate.flakes) / (cw * ch) == pytest.approx(d.number_density_per_mm2, rel=1e-6)
+    path = example_path("grey_metallic")
+    raw = tomllib.loads(path.read_text())
+    raw["spectral"]["step_nm"] = 40
+    raw["image"].update(scene="booth", stereo=False, pixels=[30, 20])
+    rec = parse_recipe(raw, base_dir=path.parent)
+    coat = _effect_coat(rec)
+    d, fl = coat.derived(), coat.flake_list()
+    seen = []
+    real = render.render_plate
+    monkeypatch.setattr(render, "render_plate", lambda plate, *a, **k: seen.append(plate) or real(plate, *a, **k))
+    compute(rec, progress=False)
+    (cli_plate, _) = plate_from_recipe_file(path)
+    for plate in (seen[0], cli_plate):
+        assert len(plate.flakes) == len(fl)
+        np.testing.assert_allclose(plate.flakes.region_nm, fl.region_nm)
+        cw, ch = plate.cell_mm
+        assert len(plate.flakes) / (cw * ch) == pytest.approx(d.number_density_per_mm2, rel=1e-6)

@@ -59,15 +59,11 @@ def recipe_paint(recipe, mats, w, res):
 
 
 def _flake_cell(recipe, brdf, im):
-    """The unit cell of discrete flakes: a composition ``[effect]``'s own (its EffectCoat's deposit
-    or volume draw, the flakes of its statistical BRDF), else flakes drawn at the expert optical depth."""
+    """Flakes drawn at the expert ``[effect] optical_depth`` (a composition ``[effect]``'s callers pass
+    its EffectCoat's own cell instead, :func:`recipe_painted_plate`)."""
     from nmmm.appearance.flakes import FlakeList
 
     e = recipe.effect
-    if e.by_composition:
-        from nmmm.recipes.run import _effect_coat
-
-        return _effect_coat(recipe).flake_list()
     cell = im.cell_um * 1e3
     d = im.flake_diameter_um * 1e3
     cv = 0.3
@@ -88,15 +84,19 @@ def _eye_centre_mm(im):
     return np.array([0.0, -im.distance_cm * np.sin(view_tilt), im.distance_cm * np.cos(view_tilt)]) * 10.0
 
 
-def recipe_painted_plate(recipe, brdf, flakes: bool = True, image=None):
+def recipe_painted_plate(recipe, brdf, flakes=True, image=None):
     """The :class:`~nmmm.appearance.render.PaintedPlate` of ``[image]`` (``image``, default the
-    recipe's, else the defaults: a 15 cm × 10 cm plate); an effect paint carries its flake
-    unit cell when ``flakes``."""
+    recipe's, else the defaults: a 15 cm × 10 cm plate); an effect paint carries a flake
+    unit cell when ``flakes``: a :class:`~nmmm.appearance.flakes.FlakeList` given here (a composition
+    ``[effect]``'s EffectCoat cell, the flakes behind its BRDF), or ``True``: drawn at the expert optical depth."""
     from nmmm.appearance.render import PaintedPlate
     from nmmm.recipes.schema import Image
 
     im = image or recipe.image or Image()
-    cell = _flake_cell(recipe, brdf, im) if (flakes and recipe.effect is not None) else None
+    if flakes is not None and not isinstance(flakes, bool):
+        cell = flakes
+    else:
+        cell = _flake_cell(recipe, brdf, im) if (flakes and recipe.effect is not None) else None
     return PaintedPlate(brdf, cell, (im.plate_cm[0] * 10.0, im.plate_cm[1] * 10.0))
 
 
@@ -205,7 +205,7 @@ def _aspecular_range(cam, lights):
     return np.degrees(np.arccos(np.clip(np.sum(m * wi, axis=-1), -1.0, 1.0)))
 
 
-def recipe_plate_images(recipe, brdf, w, keep: dict, flakes: bool = True) -> dict:
+def recipe_plate_images(recipe, brdf, w, keep: dict, flakes=True) -> dict:
     """sRGB images (name -> (H, W, 3) in [0, 1]) of the ``[image]`` plate: ``"view"`` (mono)
     or ``"left eye"``/``"right eye"``; the spectral images go into ``keep``.
 

@@ -60,7 +60,7 @@ def plate_from_recipe_file(path):
     ``[thin_film]`` recipe a :class:`RecipeSpecularPlate` (a glass plate on a light table of the first illuminant
     unless its ``[image] scene`` says otherwise)."""
     from nmmm.recipes.plate_image import recipe_paint, recipe_painted_plate
-    from nmmm.recipes.run import _effect_brdf, build_materials, compute
+    from nmmm.recipes.run import _effect_brdf, _effect_coat, build_materials, compute
     from nmmm.recipes.schema import load_recipe
 
     recipe = load_recipe(path)
@@ -72,7 +72,9 @@ def plate_from_recipe_file(path):
         return _specular_plate(load_recipe(path), res, w), w
     brdf = _effect_brdf(recipe) if recipe.effect is not None else \
         recipe_paint(recipe, build_materials(recipe, w, progress=False), w, res)
-    return recipe_painted_plate(recipe, brdf, True, load_recipe(path).image), w
+    own = recipe.effect is not None and recipe.effect.by_composition  # a composition coat's own flake cell
+    cell = _effect_coat(recipe).flake_list() if own else True
+    return recipe_painted_plate(recipe, brdf, cell, load_recipe(path).image), w
 
 
 if plate_from_recipe_file not in PLATE_LOADERS:

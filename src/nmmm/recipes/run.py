@@ -349,7 +349,8 @@ def _effect(recipe, mats, w, res):
         if recipe.image.scene != "point" or recipe.image.tilt_deg:  # booth, CIE sky, tilt (issue 19): plate_image
             from nmmm.recipes.plate_image import recipe_plate_images
 
-            images = recipe_plate_images(recipe, brdf, w, res.spectral_images, flakes=recipe.image.renderer == "auto")
+            images = recipe_plate_images(recipe, brdf, w, res.spectral_images, flakes=(  # the coat's own flake cell
+                coat.flake_list() if coat is not None else True) if recipe.image.renderer == "auto" else False)
             res.notes.append(f"Images: nmmm.appearance.render — the plate (tilt {recipe.image.tilt_deg:g}°) in the scene "
                              f"'{recipe.image.scene}' (walls/ground {recipe.image.wall_reflectance:g}), tone-mapped.")
         elif recipe.image.renderer == "auto":
