@@ -121,14 +121,11 @@ def test_booth_lamp_on_the_metallic_matches_mitsuba():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="nmmm's render_plate integrates a lat-long map's light on the flake lobe over "
-                   "8 x 16 hemisphere cells: the booth walls' share of the grey metallic plate is 12-15 % low in "
-                   "the middle column (Mitsuba +1.5 to +3.2 % on lamp + walls; 32 x 64 cells: <= 0.9 %)")
 def test_booth_metallic_with_walls_matches_mitsuba():
     """The grey metallic recipe in the whole booth (point lamp as above + the grey walls as a lat-long map):
-    the issue's 'same scene (plate, source, booth)' for a metallic paint. Fails today by +2.8 to +3.2 % in
-    the middle column (4096 spp, s.e. <= 0.24 % there; +4.8 to +6.3 % with the mirror-faced flakes before
-    ae0fc01); remove the xfail when the renderer's environment quadrature resolves the flake lobe."""
+    the issue's 'same scene (plate, source, booth)' for a metallic paint. With the renderer's hemisphere
+    quadrature at 8 x 16 cells this was +2.8 to +3.2 % in the middle column (the walls' light on the flake
+    lobe 12-15 % low); at 16 x 32 cells every region is within 1.3 % (4096 spp, s.e. <= 0.4 %)."""
     _mitsuba()
     from nmmm.appearance.render.mitsuba_crosscheck import crosscheck_plate
 

@@ -339,7 +339,7 @@ class LatLongEnvironment:
 
         return envmap_lookup_bilinear(self, wavelength_nm, directions)
 
-    def upper_quadrature(self, wavelength_nm, n_theta: int = 8, n_phi: int = 16):
+    def upper_quadrature(self, wavelength_nm, n_theta: int = 16, n_phi: int = 32):
         """(directions (K, 3), solid angles (K,), radiance (K, L)) of the upper hemisphere,
         the map averaged over n_theta × n_phi cells (equal steps in θ and φ)."""
         r = self._on(wavelength_nm)

@@ -67,7 +67,7 @@ else:  # pragma: no cover
     _mirror_env = _mirror_env_py
 
 
-def _envmap_smooth(brdf, w, envmap, wo_grid, hit_grid, sub: int = 4, n_theta: int = 8, n_phi: int = 16, quad=None):
+def _envmap_smooth(brdf, w, envmap, wo_grid, hit_grid, sub: int = 4, n_theta: int = 16, n_phi: int = 32, quad=None):
     """Radiance reflected from a lat-long environment by the non-Dirac BRDF terms,
     ∑_k f(ω_k, ωo) cos θ_k ΔΩ_k L_k over n_theta × n_phi cells of the upper hemisphere,
     on every ``sub``-th node of the coarse grid, interpolated back onto it (``quad``: the map's

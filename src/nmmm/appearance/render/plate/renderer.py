@@ -75,9 +75,13 @@ def _evaluate_f32(brdf, w, wi, wo, comps):
 #: booth at 1024 x 683: within 5e-4 of the integral at every coarse node (a rough coat's GGX lobe
 #: keeps every 4th node: 1e-3). Review N, booth 1024 x 683, fov 24 / 40 (every 10th / 6th node),
 #: largest error over the plate / the plate's largest value: 7e-5 (seed metallic), 2.5e-4 (flake
-#: tilt 4 deg), 8e-4 (tilt 2 deg), 1.4e-4 (pearl). The limit is the 8 x 16 hemisphere quadrature
-#: itself, against 32 x 64 cells: 0.35 %, 1 %, 5 %, 0.4 %, and 7 % for a GGX 0.05 coat (every 4th
-#: node, unchanged). The lamps' mirror images and direct light are not in this integral.
+#: tilt 4 deg), 8e-4 (tilt 2 deg), 1.4e-4 (pearl). The hemisphere quadrature itself is 16 x 32 cells
+#: (8 x 16 until review L/N: the booth walls' light on the grey metallic's flake lobe came out 12-15 %
+#: low against Mitsuba); largest error over the booth plate / the plate's largest value, against
+#: 32 x 64 cells (256 x 171 px, 21 wavelengths): 7.9e-5 (seed metallic), 4.9e-5 (flake tilt 4 deg),
+#: 1.2e-4 (tilt 2 deg), 9.5e-4 (GGX 0.05 coat) — at 8 x 16: 4.1e-4, 5.1e-4, 1.5e-3, 1.5e-2. It costs
+#: +13-20 % CPU per booth image at 1024 x 683. The lamps' mirror images and direct light are not in
+#: this integral.
 ENVMAP_NODE_DEG = 1.0
 
 
@@ -169,7 +173,7 @@ def render_plate(plate: PaintedPlate, camera: PinholeCamera, lights=(), environm
     lights : DirectionalLight / PointLight or a sequence of them
     environment : UniformEnvironment or LatLongEnvironment, optional
         Uniform spectral sky (reflected through the paint's albedo) or a spectral lat-long
-        map (non-Dirac terms integrated over 8 × 16 cells of the upper hemisphere on a
+        map (non-Dirac terms integrated over 16 × 32 cells of the upper hemisphere on a
         4×-coarser grid; the smooth coat's mirror image of the map at full resolution);
         seen behind the plate.
     wavelength_nm : (L,) grid, default 380–780 nm every 5 nm (81 wavelengths).

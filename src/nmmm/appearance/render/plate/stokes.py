@@ -17,7 +17,7 @@ chain, normalised to that column's S0 (so that S0 stays the unpolarized renderer
   incidence and the Stokes frame rotated between them;
 - the rough coat's and the flakes' reflection of a sky or map (statistical, as in
   :func:`render_plate`, also on a plate with a flake cell): the same per-direction Stokes vectors
-  integrated over 8 × 16 cells of the upper hemisphere on a coarse pixel grid.
+  integrated over 16 × 32 cells of the upper hemisphere on a coarse pixel grid.
 
 The **diffuse body and the multiple-scattering lobe are depolarizing**: they add to S0 only (their
 light crossed the coat twice, whose small diattenuation is neglected). The discrete flakes' glints
@@ -242,7 +242,7 @@ class StokesImage:
         return p
 
 
-def _hemisphere(environment, w, n_theta=8, n_phi=16):
+def _hemisphere(environment, w, n_theta=16, n_phi=32):
     """(directions (K, 3), solid angles (K,), radiance (K, L)) of the sky / map above the plate."""
     from nmmm.appearance.render.lights import LatLongEnvironment, UniformEnvironment
 
@@ -264,7 +264,7 @@ def render_plate_stokes(plate, camera, lights=(), environment=None, wavelength_n
     """Spectral Stokes image (S0..S3) of ``plate`` seen by ``camera`` (arguments as
     :func:`~nmmm.appearance.render.plate.render_plate`, whose image is S0). ``env_step``: pixel
     step of the coarse grid on which the rough coat's and the flakes' polarized reflection of a
-    sky or map is integrated (8 × 16 hemisphere cells) and then interpolated bilinearly."""
+    sky or map is integrated (16 × 32 hemisphere cells) and then interpolated bilinearly."""
     from scipy.interpolate import RegularGridInterpolator
 
     from nmmm.appearance.render.lights import LatLongEnvironment, UniformEnvironment
