@@ -527,12 +527,16 @@ def test_white_furnace_rough_rim_flakes_in_a_scattering_band(theta):
 
 
 def test_shipped_red_metallic_reciprocity():
-    """The red metallic as a user gets it (EffectCoat from the shipped recipe: hematite medium, flake band, rough faces,
-    rims): f(wi, wo) = f(wo, wi) to 1e-10 on random pairs (review O)."""
-    from nmmm.recipes.run import _effect_coat
-    from nmmm.recipes.schema import example_path, load_recipe
+    """The red metallic as a user gets it (EffectCoat from the shipped recipe: hematite medium, flake band) with the
+    recipe's face_roughness = 0.05 and edge_width_nm = 500 keys on: f(wi, wo) = f(wo, wi) to 1e-10 (review O)."""
+    import tomllib
 
-    rec = load_recipe(example_path("red_metallic"))
+    from nmmm.recipes.run import _effect_coat
+    from nmmm.recipes.schema import example_path, parse_recipe, set_key
+
+    raw = tomllib.loads(example_path("red_metallic").read_text())
+    raw = set_key(set_key(raw, "effect.flakes.face_roughness", 0.05), "effect.flakes.edge_width_nm", 500.0)
+    rec = parse_recipe(raw, base_dir=example_path("red_metallic").parent)
     paint, _ = _effect_coat(rec, w=W).brdf(W)
     assert paint.medium is not None and paint.flakes.surface_roughness > 0 and paint.flakes.edge_fraction > 0
     rng = np.random.default_rng(11)

@@ -151,24 +151,22 @@ def test_demo_coloured_coats_are_the_recipes():
 
 def test_flake_face_roughness_and_rims_reach_the_brdf():
     """[effect.flakes] face_roughness (GGX α of the faces) and edge_width_nm (rim width w, f_e = 4 w / ⟨D⟩) are the
-    FlakeLayer's surface_roughness and edge_fraction; the defaults (0.05, 500 nm, assumed) are on for the shipped
-    grey metallic, and with both at 0 the paint is the mirror-flake one. Rough faces and rims lift the far side:
-    L* falls more from 75° to 110° than with mirror flakes (review O)."""
+    FlakeLayer's surface_roughness and edge_fraction; both default to 0 (mirror flakes, the renderer's glints). Rough
+    faces and rims lift the far side: L* falls more from 75° to 110° than with mirror flakes (review O)."""
     from nmmm.appearance.deposit import grey_metallic_coat
     from nmmm.recipes.effect_schema import build_effect_coat
 
     w = np.arange(380.0, 781.0, 20.0)
     paint, _ = grey_metallic_coat().brdf(w)
-    assert paint.flakes.surface_roughness == 0.05
-    assert paint.flakes.edge_fraction == pytest.approx(4 * 500.0 / 20e3, rel=1e-12)
+    assert paint.flakes.surface_roughness == 0.0 and paint.flakes.edge_fraction == 0.0
     raw = _raw("grey_metallic")
-    mirror = set_key(set_key(raw, "effect.flakes.face_roughness", 0.0), "effect.flakes.edge_width_nm", 0.0)
-    rec = parse_recipe(mirror, base_dir=example_path("grey_metallic").parent)
-    coat = build_effect_coat(rec.effect, {}, name="x")
-    p0, _ = coat.brdf(w)
-    assert p0.flakes.surface_roughness == 0.0 and p0.flakes.edge_fraction == 0.0
-    L = {m["aspecular_deg"]: m["L"] for m in _run(raw).multiangle}
-    L0 = {m["aspecular_deg"]: m["L"] for m in _run(mirror).multiangle}
+    rough = set_key(set_key(raw, "effect.flakes.face_roughness", 0.05), "effect.flakes.edge_width_nm", 500.0)
+    rec = parse_recipe(rough, base_dir=example_path("grey_metallic").parent)
+    p1, _ = build_effect_coat(rec.effect, {}, name="x").brdf(w)
+    assert p1.flakes.surface_roughness == 0.05
+    assert p1.flakes.edge_fraction == pytest.approx(4 * 500.0 / 20e3, rel=1e-12)
+    L = {m["aspecular_deg"]: m["L"] for m in _run(rough).multiangle}
+    L0 = {m["aspecular_deg"]: m["L"] for m in _run(raw).multiangle}
     assert L[75.0] - L[110.0] > 5 * (L0[75.0] - L0[110.0]) > 0
     assert L[15.0] < L0[15.0]  # the near-specular lobe is widened
 

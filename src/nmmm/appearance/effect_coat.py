@@ -91,13 +91,16 @@ class FlakeSpec:
     tilt_density : optional ``(tilt_deg, density_per_sr)`` tabulated density of flake normals
         (replaces ``tilt_std_deg``; needs ``derive="volume"``).
     face_roughness : GGX α of the flake faces (microfacets composed with the tilt,
-        :meth:`TiltDistribution.roughened`; Walter et al. 2007). Default 0.05: an ASSUMED value
-        for milled aluminium flakes (no measured α is cited here; 0 = mirror faces, ~0.1 and
-        above for ragged "cornflake" grades). It widens the near-specular lobe and lifts the
-        far-from-specular flake light, so L* keeps falling beyond 45° aspecular.
+        :meth:`TiltDistribution.roughened`; Walter et al. 2007); 0 = mirror faces (default).
+        About 0.05 is a plausible value for milled aluminium flakes (ASSUMED, no measured α is
+        cited here; ragged "cornflake" grades higher): it widens the near-specular lobe and lifts
+        the far-from-specular flake light, so L* keeps falling beyond 45° aspecular.
     edge_width_nm : width w of the scattering rim round each flake; the rim fraction of the
-        light meeting a flake is f_e = 4 w / ⟨D⟩ (:func:`nmmm.appearance.flakes.edge_scatter_fraction`).
-        Default 500 nm: an ASSUMED wavelength-scale width (that function's docstring); 0 = no rims.
+        light meeting a flake is f_e = 4 w / ⟨D⟩ (:func:`nmmm.appearance.flakes.edge_scatter_fraction`);
+        0 = no rims (default). 500 nm is that function's ASSUMED wavelength-scale width.
+        Both default to 0 because the plate renderer's discrete glints are still mirror flakes
+        without rims (nmmm.appearance.render.plate): with them on, the glints of the shipped red
+        metallic are 1.5x its statistical flake term at 450 nm (review O, session 4).
     """
 
     material: object = "aluminium"
@@ -108,8 +111,8 @@ class FlakeSpec:
     tilt_std_deg: float = 6.0
     tilt_density: tuple | None = None
     name: str = ""
-    face_roughness: float = 0.05
-    edge_width_nm: float = 500.0
+    face_roughness: float = 0.0
+    edge_width_nm: float = 0.0
 
     def __post_init__(self):
         _num(self.diameter_um, "flakes.diameter_um", 0.0, what=" (flake diameter, µm)")

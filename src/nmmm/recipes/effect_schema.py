@@ -19,8 +19,8 @@ An effect coat **by its composition** (issue 18)::
     thickness_nm = 300
     fraction = 0.008                 # volume fraction of the basecoat
     tilt_std_deg = 6                 # orientation spread (deposit law); or tilt_density = {tilt_deg, density_per_sr}
-    face_roughness = 0.05            # GGX alpha of the flake faces (default 0.05, assumed; 0 = mirror flakes)
-    edge_width_nm = 500              # scattering rim of each flake, f_e = 4 w / D (default 500 nm, assumed; 0 = none)
+    face_roughness = 0.05            # GGX alpha of the flake faces (default 0 = mirror flakes; ~0.05 assumed)
+    edge_width_nm = 500              # scattering rim of each flake, f_e = 4 w / D (default 0 = none; 500 nm assumed)
     [[effect.pigments]]              # the [[pigments]] of a film: compound, fraction, size, shape
     compound = "hematite"
     fraction = 0.03
@@ -72,8 +72,8 @@ class EffectFlakes(_Strict):
     fraction: Annotated[float, Field(ge=0.0, lt=1.0, allow_inf_nan=False)]
     tilt_std_deg: Annotated[float, Field(gt=0.0, le=90.0, allow_inf_nan=False)] = 6.0
     tilt_density: TiltDensity | None = None
-    face_roughness: Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False)] = 0.05
-    edge_width_nm: NonNegative = 500.0
+    face_roughness: Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False)] = 0.0
+    edge_width_nm: NonNegative = 0.0
 
     @model_validator(mode="after")
     def _one_material(self):
