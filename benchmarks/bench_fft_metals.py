@@ -30,6 +30,12 @@ Measured, session 4 (2026-12-02, load 10-12 on 2 cores, defaults, complex64 aske
 | flakes (0.10) | 128³ | −44+13i | willot2015 c64 | 200 | 178 s |
 | flakes (0.10) | 128³ | −50+5i | willot2014 c128 (switch) | 562 | 898 s |
 | flakes (0.10) | 128³ | −50+2i, −50+1i | willot2014 c128 | not finished (> 20 min, killed) | |
+Review Q, the same 128³ cell, one real Lanczos run on Γ χ Γ (willot2015, x; its per-shift residual is
+COCG's at every ε, two_phase_spectrum): to 1e-5 −44+13i 199, −50+5i 600, −50+2i 1505; −50+1i at
+8.7e-4 after 1900 (≈ 3000 at its rate); Al (Rakić) 380 nm 216, 580 nm 180. Projections grow as
+1/|Im s|, s = ε_h/(ε_m − ε_h) (|Im s| 1.3e-2, 4.1e-3, 1.6e-3, 8.2e-4): a near-singular system.
+Its Bergman measure of e_x has 27 % of its weight at μ ∈ [0.02, 0.05), largest nodes near 0.03
+(ε_res ≈ −73; overlapping discs are wider than one), where −50 + 1..5i put μ_res = 0.043.
 Why the 128³ flakes are hard: the flakes here keep 2 voxels of thickness at every grid, so at
 128³ (r = 21) they are twice as flat as at 64³. For two phases, Γ ε Γ = ε_h Γ + (ε_m − ε_h) Γ χ Γ
 has its eigenvalues on the segment ε_h + (ε_m − ε_h) μ, μ ∈ [0, 1] the spectrum of the real

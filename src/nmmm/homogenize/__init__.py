@@ -48,8 +48,9 @@ Known limitations
   118-304 (benchmarks/bench_fft_metals.py).
 - Low-loss metal platelets near their in-plane plasmon resonance (ε_m ≈ ε_h (1 − 1/L), L the
   depolarisation factor; e.g. 2-voxel discs of radius 21 in 2.25 at ε = −50 + 1..5i) are
-  near-singular: 562 projections at −50 + 5i on 128³, more than 1500 at −50 + 1..2i. Real
-  aluminium in the visible (Im ε ≥ 0.19 |ε|) is far from this: 200 projections at 550 nm.
+  near-singular: 562 projections at −50 + 5i on 128³, 1505 at −50 + 2i and ≈ 3000 at −50 + 1i
+  (Lanczos ≡ COCG, x loading; the count grows as 1/|Im s|, s = ε_h/(ε_m − ε_h)). Real aluminium
+  in the visible (Im ε ≥ 0.19 |ε|, |Im s| ≥ 0.013) is far from this: 180-216 projections.
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
