@@ -50,7 +50,7 @@ Known limitations
   depolarisation factor; e.g. 2-voxel discs of radius 21 in 2.25 at ε = −50 + 1..5i) are
   near-singular: 562 projections at −50 + 5i on 128³, 1505 at −50 + 2i and ≈ 3000 at −50 + 1i
   (Lanczos ≡ COCG, x loading; the count grows as 1/|Im s|, s = ε_h/(ε_m − ε_h)). Real aluminium
-  in the visible (Im ε ≥ 0.19 |ε|, |Im s| ≥ 0.013) is far from this: 180-216 projections.
+  in the visible (Im ε ≥ 0.19 |ε|, |Im s| ≥ 0.013) is far from this: 118-216 projections per wavelength (x, y).
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
