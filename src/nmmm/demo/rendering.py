@@ -8,9 +8,10 @@ and the plate image of every shipped paint recipe, on a calibrated display.
   the demo's grey metallic and the recipe are one paint.
 - :func:`demo` — the demo hook (``nmmm demo``): renders that 15 cm × 10 cm grey metallic
   plate (334 × 223 flake unit cells of 450 µm) in a grey booth lit by a D65 source at 45° behind the
-  plate, seen from 40 cm at 30° from the normal (the recipes' eye), so that the source's
-  mirror point falls just beyond the back edge: the plate runs from the near-specular
-  "face" at the back (aspecular ≈ 5°) to the "flop" at the front (≈ 25°). The same view at
+  plate, seen from 40 cm at 25° from the normal (the recipes' eye,
+  :data:`nmmm.recipes.plate_image.VIEW_TILT_DEG`), so that the source's mirror point falls beyond the
+  back edge: the plate runs from the near-specular "face" at the back (aspecular ≈ 10°) to the
+  "flop" at the front (≈ 36°). The same view at
   8 cm (individual glints) and at 150 cm (glints merged), the stereo pair at reading
   distance, and every shipped paint recipe in the same booth, all written at 1:1 (one
   image pixel per PNG pixel) through the knee tone map (the booth's white tile is display
@@ -29,17 +30,19 @@ import numpy as np
 
 __all__ = ["demo", "grey_metallic_recipe_plate", "source_spread_deg"]
 
-#: the eye: 35° from the plate normal, on the viewer's side (−y); with the booth's 45° source
-#: at 50 cm the coat's mirror image of the source falls on the plate's back edge
-VIEW_TILT_DEG = 35.0
+#: the eye: 25° from the plate normal, on the viewer's side (−y), as in the recipes' plate images
+#: (nmmm.recipes.plate_image.VIEW_TILT_DEG): with the booth's 45° source the plate spans ~10–36°
+#: aspecular, face at the back, flop at the front (at 35° the coat mirrored the source on the back edge
+#: and the recipe's narrow-tilt grey metallic read near white, 91 -> 417 cd/m², at 150 cm 141 -> 302)
+VIEW_TILT_DEG = 25.0
 #: distances of the grey metallic views (mm): reading distance, close-up, far
 DISTANCES_MM = {"view": 400.0, "near": 80.0, "far": 1500.0}
 #: a what-if view: flakes with a surface waviness that widens each glint's lobe to this σ (degrees)
 ROUGH_FLAKE_SPREAD_DEG = 4.0
 
 
-def _eye(distance_mm, tilt_deg=VIEW_TILT_DEG):
-    t = np.radians(tilt_deg)
+def _eye(distance_mm, tilt_deg=None):
+    t = np.radians(VIEW_TILT_DEG if tilt_deg is None else tilt_deg)
     return (0.0, -distance_mm * np.sin(t), distance_mm * np.cos(t))
 
 
@@ -299,8 +302,8 @@ def demo(output_dir, resolution=(960, 640), small_resolution=(480, 320), recipes
         f"{plate.cells[1]} unit cells of {plate.cell_mm[0] * 1e3:.0f} um with {len(plate.flakes)} Al flakes each, in a grey booth (walls 0.2) under a D65 "
         f"source at 45 deg, 2000 lx, seen at {VIEW_TILT_DEG:g} deg from 40 cm ({resolution[0]}x{resolution[1]}, "
         f"{t_mono:.1f} s for the three views; glint lobe sigma {spread:.2f} deg, the source's solid angle): the clear "
-        "coat mirrors the source at the back edge of the plate, the plate is brightest there (near-specular face) "
-        "and darker towards the front (flop); the band luminances are in the tables. Per-pixel glint variance relative to the statistical BRDF, measured vs "
+        "coat mirrors the source just beyond the back edge of the plate, the plate is brightest at the back "
+        "(near-specular face) and darker towards the front (flop); the band luminances are in the tables. Per-pixel glint variance relative to the statistical BRDF, measured vs "
         "predicted from the flake statistics (compound Poisson, nmmm.appearance.sparkle_prediction), a middle band: "
         + "; ".join(f"{k} {r['measured']:.3g} vs {r['predicted']:.3g} (se {r['standard_error']:.2g}, "
                     f"{r['glinting_flakes_per_pixel']:.2g} glinting flakes per pixel)" for k, r in v.items())
