@@ -40,6 +40,17 @@ The glinting flakes of a footprint are then a Poisson thinning of its flakes
   mean is the statistical BRDF times ``lobe_mean_factor`` = ∫p_ω g / p_ω(ωo). Closer viewing (smaller A) gives fewer,
   individually visible glints (large Var/⟨L⟩²); farther away they merge (N ≫ 1).
 
+Rough flake faces (``FlakeLayer.surface_roughness`` α > 0, the renderer's law): flake k adds
+w_k q(t(h') − t(m_k)) J, q the GGX facet density D cos of roughness α_eff (α² + 2 σ_g² J, the
+source's lobe moved to the normals), composed as tilt vectors like
+:meth:`~nmmm.appearance.flakes.TiltDistribution.roughened`, cut at 8 α_eff; the moments are
+∫ p_m q^j over the normals and the glints' mean is the BRDF's roughened facet density times
+``lobe_mean_factor`` (≈ 0.985, the cut tail). Most flakes of a pixel then glint, so the
+correlation of the flakes' weights with their places in a deposit cell matters: the relative
+variance is ⟨w²⟩/⟨w⟩² (1/N + (R − 1)/(n_A A)), R = Var(Σ w)/(n_A A ⟨w²⟩) over footprint-sized
+windows of the cell (R = 1 compound Poisson). :func:`simulate_glint_pixels` still draws the
+Gaussian lobe (mirror faces).
+
 :func:`glint_footprint_statistics` evaluates these per pixel. :func:`simulate_glint_pixels`
 draws pixel values from the same compound-Poisson law (no renderer, no flake positions),
 and :func:`predicted_sparkle` applies the definitions of :func:`nmmm.appearance.sparkle.
@@ -171,6 +182,81 @@ def _lobe_moments(tilt, n, ip, wo, sigma, n_r: int = 6, n_phi: int = 8, chunk: i
     return tuple(v.reshape(shape) for v in out)
 
 
+#: the cut of a rough-faced flake's facet lobe in units of its width α_eff (the renderer's)
+ROUGH_LOBE_CUT = 8.0
+
+
+def _facet_lobe_moments(tilt, n, ip, wo, sigma, alpha, n_r: int = 24, n_phi: int = 16, chunk: int = 4096):
+    """Rough flake faces (GGX α): each flake k adds K_k = q(t(h') − t(m_k)) per sr of facet
+    normals at the path's half vector h', q = D cos of roughness α_eff (α_eff² = α² + 2 σ_n²,
+    σ_n² = σ_g² J, J = cos θo / (4 n² (ωi'·h') cos θo'): the source's lobe moved to the normals)
+    per unit tilt-vector area (small-angle composition, the law of TiltDistribution.roughened),
+    cut at |δ| <= ROUGH_LOBE_CUT α_eff(normal view). Returns (∫_cut p, ∫ p K, ∫ p K², ∫ p K⁴)
+    over the flake tilt density p (per tilt area, K with the factor θh/sin θh that makes it per
+    sr) by a polar Gauss quadrature around t(h') (radius r = α_eff tan ψ, Gauss–Legendre in ψ),
+    and J."""
+    shape = wo.shape[:-1]
+    op = _refract_in(wo, n)
+    h = ip + op
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    ih = np.clip(np.sum(ip * h, axis=-1), 1e-9, 1.0)
+    J = np.clip(wo[..., 2], 0.0, None) / (4 * n * n * ih * np.maximum(op[..., 2], 1e-9))
+    h2, J2 = h.reshape(-1, 3), J.ravel()
+    rcut = min(ROUGH_LOBE_CUT * math.sqrt(alpha ** 2 + 2 * sigma ** 2 / (4 * n * n)), math.radians(35.0))
+    x, wx = np.polynomial.legendre.leggauss(n_r)
+    ph = (np.arange(n_phi) + 0.5) * 2 * math.pi / n_phi
+    cp, sp = np.cos(ph), np.sin(ph)
+    out = np.zeros((4, h2.shape[0]))
+    for i in range(0, h2.shape[0], chunk):
+        hh = h2[i:i + chunk]
+        ae = np.sqrt(alpha ** 2 + 2 * sigma ** 2 * J2[i:i + chunk])[:, None]  # (c, 1)
+        pm = np.arctan(rcut / ae)
+        psi = 0.5 * (x[None, :] + 1) * pm  # (c, n_r)
+        r = ae * np.tan(psi)
+        wr = 0.5 * pm * wx[None, :] * ae / np.cos(psi) ** 2 * r * (2 * math.pi / n_phi)  # dr · r dφ
+        cd = np.cos(r)
+        dd = cd * cd * (ae * ae - 1.0) + 1.0
+        sh = np.hypot(hh[:, 0], hh[:, 1])
+        th = np.arctan2(sh, hh[:, 2])
+        fh = np.where(sh > 1e-12, th / np.maximum(sh, 1e-300), 1.0)
+        K = ae * ae / (math.pi * dd * dd) * cd * np.where(r > 1e-12, np.sin(r) / np.maximum(r, 1e-300), 1.0)
+        K = K * fh[:, None]
+        th_x, th_y = (fh * hh[:, 0])[:, None, None], (fh * hh[:, 1])[:, None, None]
+        mx = th_x - r[:, :, None] * cp[None, None, :]
+        my = th_y - r[:, :, None] * sp[None, None, :]
+        tm = np.hypot(mx, my)
+        pf = tilt.pdf(np.cos(np.minimum(tm, math.pi / 2))) * np.where(tm > 1e-12, np.sin(tm) / np.maximum(tm, 1e-300), 1.0)
+        pf = np.where(tm < math.pi / 2, pf, 0.0)
+        ps = pf.sum(axis=2) * wr  # (c, n_r)
+        out[0, i:i + chunk] = ps.sum(axis=1)
+        out[1, i:i + chunk] = (ps * K).sum(axis=1)
+        out[2, i:i + chunk] = (ps * K * K).sum(axis=1)
+        out[3, i:i + chunk] = (ps * K ** 4).sum(axis=1)
+    return tuple(v.reshape(shape) for v in out) + (J, h)
+
+
+def _window_sum_excess(flakes, w, areas_mm2, n_windows: int = 4000, seed: int = 0):
+    """R(A) = Var(Σ_k w_k over a window of area A) / (n_A A ⟨w²⟩) of the flake cell (periodic),
+    square windows at random places: 1 for independently marked Poisson flakes (compound
+    Poisson), < 1 for a regular or fixed-count cell, > 1 where bright flakes cluster (a
+    deposit: the depth weights e^{−x ζ} are correlated in space). ``areas_mm2`` (M,) -> (M,)."""
+    cw, chh = (float(v) * 1e-6 for v in flakes.region_nm)
+    pos = np.asarray(flakes.positions_nm, float)[:, :2] * 1e-6
+    n_a = pos.shape[0] / (cw * chh)
+    rng = np.random.default_rng(seed)
+    c = rng.random((n_windows, 2)) * (cw, chh)
+    d = pos[None, :, :] - c[:, None, :]
+    d[..., 0] -= cw * np.round(d[..., 0] / cw)
+    d[..., 1] -= chh * np.round(d[..., 1] / chh)
+    out = []
+    for A in np.atleast_1d(areas_mm2):
+        half = 0.5 * min(math.sqrt(A), cw, chh)
+        inside = (np.abs(d[..., 0]) < half) & (np.abs(d[..., 1]) < half)
+        sw = inside.astype(float) @ w
+        out.append(sw.var() / (n_a * (2 * half) ** 2 * float(np.mean(w * w))))
+    return np.array(out)
+
+
 def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_spread_deg: float = 1.0,
                                wavelength_nm: float = 550.0) -> GlintFootprintStatistics:
     """Predicted glint statistics of pixels whose footprint on the plate is ``footprint_mm2``.
@@ -211,16 +297,27 @@ def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_sprea
     # the lobe moments of the mirror density, ∫ p_ω(ω) g^j(∠(ω, ωo)) dω (j = 0 over the cut
     # disc, 1, 2, 4), by a polar Gauss quadrature around ωo: exact for a density that varies
     # across a wide lobe, → p_ω(ωo) ∫ g^j as σ_g → 0
-    I0, I1, I2, I4 = _lobe_moments(tilt, n, ip, wo, s)
+    alpha = float(getattr(paint.flakes, "surface_roughness", 0.0) or 0.0)
+    if alpha > 0:
+        # rough faces: the moments over the facet lobe in the normals' tilt-vector plane; the
+        # glints' mean against the statistical term's facet density (tilt.roughened(α), the
+        # BRDF's) at h'
+        I0, I1, I2, I4, J, h = _facet_lobe_moments(tilt, n, ip, wo, s, alpha)
+        rough = tilt.roughened(alpha)
+        p_r = rough.pdf(h[..., 2])
+        p_w = p_r * J
+        lobe_factor = np.where(p_r > 0, I1 / np.where(p_r > 0, p_r, 1.0), 1.0)
+    else:
+        I0, I1, I2, I4 = _lobe_moments(tilt, n, ip, wo, s)
+        lobe_factor = np.where(p_w > 0, I1 / np.where(p_w > 0, p_w, 1.0), 1.0)
     N = np.where(I2 > 0, n_a * A * I1 * I1 / np.where(I2 > 0, I2, 1.0), 0.0)
     lam = n_a * A * I0
-    lobe_factor = np.where(p_w > 0, I1 / np.where(p_w > 0, p_w, 1.0), 1.0)
     # weights a_k exp(-τ_e S ζ_k) at each pixel's path factor S
     a = np.asarray(flakes.areas_nm2, float) * 1e-12
     zeta = _depth_fraction(flakes)
     tau_e = float(np.mean(tab.tau_e))
     mu_g = np.linspace(0.05, 1.0, 96)
-    a_g = np.asarray(tilt.projected_mean(mu_g), float)
+    a_g = np.asarray((rough if alpha > 0 else tilt).projected_mean(mu_g), float)
     S = np.interp(ip[..., 2], mu_g, a_g) / ip[..., 2] + np.interp(op[..., 2], mu_g, a_g) / op[..., 2]
     # a pigmented basecoat (κ = (μa + μs) H, flakes in the band z0 … z0 + dz): flake k at
     # z0 + dz ζ_k is dimmed by e^{−κ S' (z0 + dz ζ_k)}, S' = 1/μi' + 1/μo'; e^{−κ S' z0} is
@@ -235,8 +332,15 @@ def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_sprea
     m4 = np.array([np.mean((a * np.exp(-v * zeta)) ** 4) for v in xs])
     ratio = np.interp(x, xs, m2 / m1 ** 2)
     ratio4 = np.interp(x, xs, m4 / m1 ** 4)
+    # the flakes' weights are not independent of their places in a deposit cell (bright,
+    # shallow flakes cluster): Var = n_A A ⟨w²⟩ (I2 − I1²) + Var(Σ w) I1², so the relative
+    # variance is ⟨w²⟩/⟨w⟩² (1/N + (R − 1)/(n_A A)), R the cell's window-sum excess
+    # (R = 1: compound Poisson). It matters where most flakes of a pixel glint (rough faces)
+    Ag = np.geomspace(max(float(A.min()), 1e-8), max(float(A.max()), 1e-8), 9)
+    Rg = _window_sum_excess(flakes, a * np.exp(-float(np.mean(x)) * zeta), Ag)
+    R = np.interp(np.log(A), np.log(Ag), Rg)
     with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.where(N > 0, ratio / N, np.inf)
+        rel = np.where(N > 0, ratio / N + ratio * (R - 1.0) / (n_a * A), np.inf)
         k4 = np.where(I1 > 0, ratio4 * I4 / ((n_a * A) ** 3 * I1 ** 4), np.inf)
     weights = a * np.exp(-float(np.mean(x)) * zeta)
     return GlintFootprintStatistics(N, lam, rel, ratio, p_w, float(n_a), A, s, weights, k4, lobe_factor)

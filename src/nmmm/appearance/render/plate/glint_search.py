@@ -63,11 +63,21 @@ if _nb is not None:
                      cam, cam_r, cam_u, cam_f, tx, ty, sx, sy, W, H,
                      hx, hy, cw, ch, i0, i1, j0, j1,
                      fpos, fnrm, farea, fdiam, fzeta, fpig, G, gstart_all, gorder_all,
-                     lkind, lvec, lscale, n, sigma, cut, a_tab, astep, randomize, seed, splat):
+                     lkind, lvec, lscale, n, sigma, cut, a_tab, astep, randomize, seed, splat,
+                     alpha=0.0, rcut=0.0):
         """One pass over the visible tiles (rows j in parallel): count (fill=False) or
         write (fill=True) the glint records (pixel, weight, angles, light). ``fpig`` (N,) is
         the fraction of the coat's pigment optical thickness κ above each flake (z0 + dz ζ),
-        recorded as S' fpig (S' = 1/μi' + 1/μo') for the pigments' exp(−κ S' fpig)."""
+        recorded as S' fpig (S' = 1/μi' + 1/μo') for the pigments' exp(−κ S' fpig).
+
+        ``alpha`` > 0: rough flake faces (GGX α, :meth:`~nmmm.appearance.flakes.TiltDistribution.
+        roughened`'s law). A flake then reflects through the facet normal h' of the actual
+        light → flake → camera path (not its mirror direction): its facets have the density
+        D(δ) cos δ per sr at the tilt-vector offset δ = t(h') − t(m) (small-angle composition,
+        with the per-tilt-area Jacobians sin δ/δ and θh/sin θh of the FFT composition), D of
+        roughness α_eff, α_eff² = α² + 2 σ_n², σ_n² = σ_g² J the source's lobe moved to the
+        normals (J = dω_h/dω_o = cos θo / (4 n² (ωi'·h') cos θo')), cut at δ <= ``rcut``; the
+        lobe per external sr is that density times J, the reflectance is taken at ωi'·h'."""
         pix_sa = (2 * tx / W) * (2 * ty / H)
         nl = lkind.size
         inv2s2 = 1.0 / (2 * sigma * sigma)
@@ -141,7 +151,7 @@ if _nb is not None:
                     hxv = hxc
                     hyv = hyc
                     # search radius in the flake-normal (m_x, m_y) plane
-                    r = mfac * maxang + half_diag / dc + half_diag / dl
+                    r = max(mfac * maxang, 1.1 * rcut) + half_diag / dc + half_diag / dl
                     bx0 = int(math.floor((hxv - r + 1) * 0.5 * G))
                     bx1 = int(math.floor((hxv + r + 1) * 0.5 * G))
                     by0 = int(math.floor((hyv - r + 1) * 0.5 * G))
@@ -188,21 +198,62 @@ if _nb is not None:
                                 mx = cph * fnrm[var, k, 0] - sph * fnrm[var, k, 1]
                                 my = sph * fnrm[var, k, 0] + cph * fnrm[var, k, 1]
                                 mz = fnrm[var, k, 2]
-                                c = mx * jx + my * jy + mz * jz
-                                if c <= 0:
-                                    continue
-                                qx = 2 * c * mx - jx
-                                qy = 2 * c * my - jy
-                                qz = 2 * c * mz - jz
-                                s2 = n * n * (qx * qx + qy * qy)
-                                if qz <= 0 or s2 >= 1:
-                                    continue
-                                fx = n * qx
-                                fy = n * qy
-                                fz = math.sqrt(1 - s2)
-                                ca = fx * wox + fy * woy + fz * woz
-                                if ca < cosmax:
-                                    continue
+                                ca = 1.0
+                                if alpha > 0.0:
+                                    # rough faces: the facet normal of the actual path
+                                    if woz <= 0:
+                                        continue
+                                    qx = wox / n
+                                    qy = woy / n
+                                    qz = math.sqrt(max(0.0, 1 - qx * qx - qy * qy))
+                                    fz = woz
+                                    h1 = jx + qx
+                                    h2 = jy + qy
+                                    h3 = jz + qz
+                                    hl = math.sqrt(h1 * h1 + h2 * h2 + h3 * h3)
+                                    h1 /= hl
+                                    h2 /= hl
+                                    h3 /= hl
+                                    c = h1 * jx + h2 * jy + h3 * jz
+                                    if c <= 0 or qz <= 0:
+                                        continue
+                                    sh = math.sqrt(h1 * h1 + h2 * h2)
+                                    th_h = math.atan2(sh, h3)
+                                    fh = th_h / sh if sh > 1e-12 else 1.0
+                                    sm = math.sqrt(mx * mx + my * my)
+                                    fm = math.atan2(sm, mz) / sm if sm > 1e-12 else 1.0
+                                    ddx = fh * h1 - fm * mx
+                                    ddy = fh * h2 - fm * my
+                                    dlt = math.sqrt(ddx * ddx + ddy * ddy)
+                                    if dlt > rcut:
+                                        continue
+                                    jac = woz / (4 * n * n * c * qz)
+                                    ae2 = alpha * alpha + 2 * sigma * sigma * jac
+                                    cd = math.cos(dlt)
+                                    dd = cd * cd * (ae2 - 1.0) + 1.0
+                                    kf = ae2 / (math.pi * dd * dd) * cd
+                                    if dlt > 1e-12:
+                                        kf *= math.sin(dlt) / dlt
+                                    if sh > 1e-12:
+                                        kf *= th_h / sh
+                                    grough = kf * jac
+                                else:
+                                    c = mx * jx + my * jy + mz * jz
+                                    if c <= 0:
+                                        continue
+                                    qx = 2 * c * mx - jx
+                                    qy = 2 * c * my - jy
+                                    qz = 2 * c * mz - jz
+                                    s2 = n * n * (qx * qx + qy * qy)
+                                    if qz <= 0 or s2 >= 1:
+                                        continue
+                                    fx = n * qx
+                                    fy = n * qy
+                                    fz = math.sqrt(1 - s2)
+                                    ca = fx * wox + fy * woy + fz * woz
+                                    if ca < cosmax:
+                                        continue
+                                    grough = 0.0
                                 zc = dx * cam_f[0] + dy * cam_f[1] + dz * cam_f[2]
                                 if zc <= 0:
                                     continue
@@ -253,8 +304,11 @@ if _nb is not None:
                                         continue
                                 elif col < 0 or col >= W or row < 0 or row >= H:
                                     continue
-                                ang = math.acos(min(1.0, ca))
-                                g = gnorm * math.exp(-ang * ang * inv2s2)
+                                if alpha > 0.0:
+                                    g = grough
+                                else:
+                                    ang = math.acos(min(1.0, ca))
+                                    g = gnorm * math.exp(-ang * ang * inv2s2)
                                 cosa = zc / d
                                 omega = pix_sa * cosa * cosa * cosa
                                 wgt = e * farea[k] * c / jz * g / (omega * d * d)
