@@ -400,7 +400,8 @@ class EffectCoat:
             lst = self.flake_list()
             tau = lst.optical_depth
             na = dep.number_density_per_nm2
-            tilt = TiltDistribution.from_normals(dep.normals, name="deposit normals") if len(dep) >= 2 \
+            tilt = TiltDistribution.from_normals(dep.normals, name="deposit normals", weights=lst.areas_nm2) \
+                if len(dep) >= 2 \
                 else fl.tilt_distribution()
             if len(dep):
                 depth = dep.depth_nm

@@ -338,16 +338,17 @@ class TiltDistribution:
         return cls(t, np.asarray(density_per_sr(t), float) * np.ones_like(t), name)
 
     @classmethod
-    def from_normals(cls, normals, bandwidth_deg: float | None = None, name: str = "from normals") -> "TiltDistribution":
-        """Smooth isotropic density estimated from flake normals (N, 3).
-
-        Kernel density estimate in the plane of tilt vectors θ(cos φ, sin φ) with a
-        Gaussian kernel of width h (Silverman's rule h = σ N^(−1/6) for two dimensions if
-        not given), averaged over azimuth — which gives, per tilt vector area,
-        p(θ) = (1/N) Σ_k exp(−(θ − θ_k)²/2h²) I0e(θ θ_k / h²) / (2π h²) —
-        then converted per steradian (× θ / sin θ) and normalised.
-        """
-        from scipy.special import i0e
+    def from_normals(cls, normals, bandwidth_deg: float | None = None, name: str = "from normals",
+                     weights=None, kernel: str = "auto") -> "TiltDistribution":
+        """Smooth isotropic density estimated from flake normals (N, 3), each weighted by
+        ``weights`` (N,) — give the flake face areas: glint power and τ are ∝ area, so the
+        flake BRDF needs the area-weighted law (default equal weights). ``kernel``: "2d" (a
+        Gaussian in the plane of tilt vectors, for laws smooth per sr), "theta" (a Gaussian in
+        θ reflected at 0, for laws with a finite density per unit θ at 0 — a 1/sin θ peak per
+        sr, like the deposit's half-normal tilts) or "auto" (the one with the larger
+        leave-one-out likelihood). Silverman bandwidth with N = (Σw)²/Σw² unless
+        ``bandwidth_deg``. See :mod:`nmmm.appearance.tilt_kde`."""
+        from nmmm.appearance.tilt_kde import tilt_density
 
         nrm = check_finite(normals, "normals").astype(float).reshape(-1, 3)
         if nrm.shape[0] < 2:
@@ -357,22 +358,20 @@ class TiltDistribution:
             raise InvalidInputError(
                 f"normals has {int(np.sum(length == 0))} zero vector(s) (first at row {int(np.argmin(length))}); "
                 "a flake normal needs a direction")
-        th_k = np.arccos(np.clip(np.abs(nrm[:, 2]) / length, -1, 1))
-        if bandwidth_deg is None:
-            sig = np.sqrt(np.mean(th_k ** 2) / 2)  # per-axis spread of the tilt vectors
-            h = max(sig * th_k.size ** (-1 / 6), np.radians(0.05))
-        else:
+        w = np.ones(nrm.shape[0]) if weights is None else check_finite(weights, "weights").astype(float).ravel()
+        if w.shape != (nrm.shape[0],) or np.any(w < 0) or not w.sum() > 0:
+            raise InvalidInputError(f"weights must be {nrm.shape[0]} values >= 0 (one per normal, e.g. the flake "
+                                    f"face areas) with a positive sum; got shape {w.shape}")
+        if kernel not in ("auto", "2d", "theta"):
+            raise InvalidInputError(f"kernel must be 'auto', '2d' or 'theta', got {kernel!r}")
+        h = None
+        if bandwidth_deg is not None:
             h = np.radians(float(bandwidth_deg))
             if not h > 0:
                 raise InvalidInputError("bandwidth_deg must be > 0")
-        t = np.linspace(0.0, 90.0, 2049)
-        th = np.radians(t)
-        dens = np.zeros_like(th)
-        for chunk in np.array_split(th_k, max(1, th_k.size // 2000)):
-            dens += np.sum(np.exp(-(th[:, None] - chunk[None, :]) ** 2 / (2 * h * h))
-                           * i0e(th[:, None] * chunk[None, :] / (h * h)), axis=1)
-        dens *= np.where(th > 0, th / np.maximum(np.sin(th), 1e-300), 1.0)
-        return cls(t, dens, name=f"{name} (KDE, h={np.degrees(h):.2f} deg)")
+        th_k = np.arccos(np.clip(np.abs(nrm[:, 2]) / length, -1, 1))
+        t, dens, mode, h = tilt_density(th_k, w, h, kernel)
+        return cls(t, dens, name=f"{name} (KDE {mode}, h={np.degrees(h):.2f} deg)")
 
     # evaluation ----------------------------------------------------------------------
     def pdf(self, cos_tilt) -> np.ndarray:
@@ -663,11 +662,11 @@ class FlakeList:
     def to_flake_layer(self, tilt: TiltDistribution | None = None) -> FlakeLayer:
         """The statistical :class:`FlakeLayer` with the same optics and τ; the tilt
         distribution is ``tilt``, the one the list was drawn from, or a kernel density
-        estimate from the normals (:meth:`TiltDistribution.from_normals`)."""
+        estimate from the normals weighted by the face areas (:meth:`TiltDistribution.from_normals`)."""
         if tilt is None:
             tilt = self.tilt
         if tilt is None:
-            tilt = TiltDistribution.from_normals(self.normals)
+            tilt = TiltDistribution.from_normals(self.normals, weights=self.areas_nm2)
         return FlakeLayer(self.optics, tilt, self.optical_depth)
 
     # optics ---------------------------------------------------------------------------
