@@ -20,6 +20,8 @@ from nmmm.appearance.render.plate.splatting import _glint_splat
 _TILT_SAMPLE_TARGET = 200_000
 _MAX_TILT_VARIANTS = 64
 _MAX_GRID_ENTRIES = 8_000_000
+#: glint records held at once (~64 bytes each, plus the sort's copies)
+_MAX_RECORDS = 4_000_000
 
 
 #: the cut of a rough-faced flake's facet lobe, in units of its width (GGX: a flake's facets
@@ -147,26 +149,39 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     counts = np.zeros(nrow, np.int64)
     offsets = np.zeros(nrow, np.int64)
     e0 = np.zeros(0, np.int64)
-    args = (cam, r, u, f, tx, ty, sx, sy, Wd, Hd, hx, hy, cw, ch, i0, i1, j0, j1,
-            fpos, fnrm, farea, fdiam, fzeta, fpig, G, gstart, order, lkind, lvec, lscale, n, sigma, cut, a_tab, tab.step,
-            bool(randomize_tiles), int(tile_seed), bool(area_splat), alpha, rcut)
-    _glint_tiles(False, offsets, e0, np.zeros(0), np.zeros((0, 5)), e0, counts, *args)
+    rest = (fpos, fnrm, farea, fdiam, fzeta, fpig, G, gstart, order, lkind, lvec, lscale, n, sigma, cut, a_tab,
+            tab.step, bool(randomize_tiles), int(tile_seed), bool(area_splat), alpha, rcut)
+    head = (cam, r, u, f, tx, ty, sx, sy, Wd, Hd, hx, hy, cw, ch, i0, i1)
+    _glint_tiles(False, offsets, e0, np.zeros(0), np.zeros((0, 5)), e0, counts, *head, j0, j1, *rest)
     total = int(counts.sum())
     if total == 0:
         return 0
-    offsets[1:] = np.cumsum(counts)[:-1]
-    rec_pix = np.empty(total, np.int64)
-    rec_w = np.empty(total)
-    rec_th = np.empty((total, 5))
-    rec_li = np.empty(total, np.int64)
-    _glint_tiles(True, offsets, rec_pix, rec_w, rec_th, rec_li, counts, *args)
     espec = np.ascontiguousarray(np.stack(spectra), float)
     tau_e = np.ascontiguousarray(np.broadcast_to(tab.tau_e, (w.size,)), float)
     flat = img.reshape(-1, w.size)
-    order = np.argsort(rec_pix, kind="stable")
-    rec_pix, rec_w, rec_th, rec_li = rec_pix[order], rec_w[order], rec_th[order], rec_li[order]
-    starts = np.flatnonzero(np.r_[True, rec_pix[1:] != rec_pix[:-1], True]).astype(np.int64)
-    _glint_splat(flat, starts, rec_pix, rec_w, rec_th, rec_li, np.ascontiguousarray(tab.Tc), np.ascontiguousarray(tab.Rf),
-                 tab.step, tau_e, bool(np.ptp(tau_e) <= 1e-12 * max(1.0, float(tau_e.max())) and not np.any(kappa > 0)),
-                 espec, kappa)
+    const_tau = bool(np.ptp(tau_e) <= 1e-12 * max(1.0, float(tau_e.max())) and not np.any(kappa > 0))
+    # rows of tiles in chunks of at most _MAX_RECORDS glint records (rough faces give every
+    # flake of the plate a record: 4e7 for a 15 x 10 cm red metallic, 6 GB at once)
+    csum = np.cumsum(counts)
+    ja = 0
+    while ja < nrow:
+        base = csum[ja - 1] if ja > 0 else 0
+        jb = max(int(np.searchsorted(csum, base + _MAX_RECORDS, side="right")), ja + 1)
+        cnt = counts[ja:jb].copy()
+        m = int(cnt.sum())
+        if m:
+            offs = np.zeros(jb - ja, np.int64)
+            offs[1:] = np.cumsum(cnt)[:-1]
+            rec_pix = np.empty(m, np.int64)
+            rec_w = np.empty(m)
+            rec_th = np.empty((m, 5))
+            rec_li = np.empty(m, np.int64)
+            _glint_tiles(True, offs, rec_pix, rec_w, rec_th, rec_li, cnt, *head, j0 + ja, j0 + jb, *rest)
+            srt = np.argsort(rec_pix, kind="stable")
+            rec_pix, rec_w, rec_th, rec_li = rec_pix[srt], rec_w[srt], rec_th[srt], rec_li[srt]
+            starts = np.flatnonzero(np.r_[True, rec_pix[1:] != rec_pix[:-1], True]).astype(np.int64)
+            _glint_splat(flat, starts, rec_pix, rec_w, rec_th, rec_li, np.ascontiguousarray(tab.Tc),
+                         np.ascontiguousarray(tab.Rf), tab.step, tau_e, const_tau, espec, kappa)
+            del rec_pix, rec_w, rec_th, rec_li, srt
+        ja = jb
     return total
