@@ -273,9 +273,9 @@ class TiltDistribution:
 
     ``density`` is the probability density **per steradian** p(θ) of a flake normal at
     tilt θ from the surface normal, tabulated at ``tilt_deg`` (0 → 90°) and normalised so
-    that ∫ p dω = 2π ∫ p(θ) sin θ dθ = 1 over the upper hemisphere. It is the number
-    distribution of normals (equal to the area distribution when the flake size does not
-    depend on tilt).
+    that ∫ p dω = 2π ∫ p(θ) sin θ dθ = 1 over the upper hemisphere. The flake BRDF reads it
+    as the AREA distribution of normals (glint power and τ ∝ flake area): estimates from
+    flakes weight each normal by its face area (:meth:`from_normals`).
 
     Build it with :func:`gaussian_tilt`, :meth:`tabulated` or :meth:`from_function`; a
     density that is negative, not finite or has zero integral raises
