@@ -104,31 +104,9 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
     by_label = {int(v): table[:, i] for i, v in enumerate(values)}
     kwargs.setdefault("workers", 1)
     kwargs["_decide_on"] = table
-    from dask.distributed import Client, LocalCluster
+    from nmmm.cluster import dask_client
 
-    own_cluster = own_client = None
-    try:
-        if client is None:
-            if scheduler:
-                try:
-                    client = own_client = Client(scheduler)
-                except (OSError, TimeoutError, ValueError) as exc:
-                    raise InvalidInputError(
-                        f"scheduler {scheduler!r}: no Dask scheduler could be reached ({exc}); start one with "
-                        "'dask scheduler' (and workers with 'dask worker ADDRESS'), give its tcp://HOST:8786 "
-                        "address, or leave scheduler out for a local cluster") from None
-            else:
-                import logging
-
-                try:
-                    own_cluster = LocalCluster(n_workers=int(n_workers), threads_per_worker=1, processes=True,
-                                               dashboard_address=None, silence_logs=logging.ERROR)
-                except RuntimeError as exc:
-                    raise InvalidInputError(
-                        f"the local Dask cluster's {int(n_workers)} worker processes did not start ({exc}); in a "
-                        "script, call fft_permittivity_spectrum under 'if __name__ == \"__main__\":' (worker "
-                        "processes import the main module again), or pass client= / scheduler=") from exc
-                client = own_client = Client(own_cluster)
+    with dask_client(client, scheduler, n_workers, caller="fft_permittivity_spectrum") as client:
         k = n_chunks or max(1, len(client.scheduler_info().get("workers", {})) or int(n_workers))
         bounds = _chunk_bounds(nw, k)
         # hash=False and a fresh key per call: a later call on the same cell must not meet the keys
@@ -139,11 +117,6 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
                               wavelength_nm, kwargs, pure=False, key=f"nmmm-fft-chunk-{lo}-{hi}-{tag}")
                 for lo, hi in bounds]
         parts = sorted(client.gather(futs), key=lambda p: p[0])
-    finally:
-        if own_client is not None:
-            own_client.close()
-        if own_cluster is not None:
-            own_cluster.close()
     rs = [p[2] for p in parts]
     seen = set()
     for lo, hi, _, _, found in parts:

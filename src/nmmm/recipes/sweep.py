@@ -335,25 +335,11 @@ def _sweep(recipe, varies, out_dir, scheduler, n_workers, serial, progress, plot
             _write_point(folder, pid, i, row)
             bar.update()
     else:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import as_completed
 
-        own_cluster = own_client = None
-        try:
-            if client is None:
-                if scheduler:
-                    try:
-                        client = own_client = Client(scheduler)
-                    except (OSError, TimeoutError, ValueError) as exc:
-                        raise InvalidInputError(
-                            f"scheduler {scheduler!r}: no Dask scheduler could be reached ({exc}); start one with "
-                            "'dask scheduler' (and workers with 'dask worker ADDRESS'), give its tcp://HOST:8786 "
-                            "address, or leave --scheduler out for a local cluster") from None
-                else:
-                    import logging
+        from nmmm.cluster import dask_client
 
-                    own_cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                               dashboard_address=None, silence_logs=logging.ERROR)
-                    client = own_client = Client(own_cluster)
+        with dask_client(client, scheduler, n_workers, scheduler_option="--scheduler", caller="sweep") as client:
             futs = {}
             for i, pid, p in todo:
                 f = client.submit(evaluate_point, raw, p, base_s, allow_outside_files, key=f"nmmm-point-{pid}",
@@ -366,11 +352,6 @@ def _sweep(recipe, varies, out_dir, scheduler, n_workers, serial, progress, plot
                 _write_point(folder, pid, i, row)
                 bar.update()
                 f.release()
-        finally:
-            if own_client is not None:
-                own_client.close()
-            if own_cluster is not None:
-                own_cluster.close()
     bar.close()
     from nmmm.atomic_io import atomic_path
 
