@@ -8,10 +8,11 @@ gives a :class:`RecipeSpecularPlate`, which the command renders through
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from nmmm.appearance.render.cli import PLATE_LOADERS, render
+from nmmm.appearance.render.cli import PLATE_LOADERS, RECIPE_NAMES, render
 
 __all__ = ["render", "plate_from_recipe_file", "RecipeSpecularPlate"]
 
@@ -77,5 +78,14 @@ def plate_from_recipe_file(path):
     return recipe_painted_plate(recipe, brdf, cell, load_recipe(path).image), w
 
 
+def _shipped_recipe_path(name: str) -> "Path | None":
+    """Path of the shipped recipe ``name`` (``red_metallic``), or None."""
+    from nmmm.recipes.schema import example_recipes
+
+    return example_recipes().get(name[:-5] if name.endswith(".toml") else name)
+
+
 if plate_from_recipe_file not in PLATE_LOADERS:
     PLATE_LOADERS.append(plate_from_recipe_file)
+if _shipped_recipe_path not in RECIPE_NAMES:
+    RECIPE_NAMES.append(_shipped_recipe_path)

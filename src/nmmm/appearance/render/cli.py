@@ -28,12 +28,16 @@ PAINTS = ("grey-metallic", "metallic", "interference", "solid", "white")
 #: loaders of ``--paint RECIPE.toml``: callables ``path -> (PaintedPlate, wavelength_nm)``;
 #: :mod:`nmmm.recipes.render_cli` registers the recipe one (this package sits below the recipes)
 PLATE_LOADERS: list = []
+#: functions ``name -> recipe path or None`` for the names of shipped recipes (registered by
+#: :mod:`nmmm.recipes.render_cli`, like :data:`PLATE_LOADERS`)
+RECIPE_NAMES: list = []
 
 
 class _PaintParam(click.ParamType):
-    """A preset name (:data:`PAINTS`) or the path of a recipe file (``*.toml``)."""
+    """A preset name (:data:`PAINTS`), the path of a recipe file (``*.toml``) or the name of a
+    shipped recipe (``red_metallic``, as ``nmmm run`` takes)."""
 
-    name = "PRESET|RECIPE.toml"
+    name = "PRESET|RECIPE"
 
     def convert(self, value, param, ctx):
         if value in PAINTS:
@@ -43,7 +47,12 @@ class _PaintParam(click.ParamType):
                 self.fail(f"recipe file {value!r} does not exist; give a recipe path or one of {', '.join(PAINTS)}",
                           param, ctx)
             return str(value)
-        self.fail(f"{value!r} is neither a preset ({', '.join(PAINTS)}) nor a recipe file (*.toml)", param, ctx)
+        for shipped in RECIPE_NAMES:
+            path = shipped(value)
+            if path is not None:
+                return str(path)
+        self.fail(f"{value!r} is neither a preset ({', '.join(PAINTS)}), a recipe file (*.toml) nor a shipped "
+                  "recipe's name (nmmm run --help lists them)", param, ctx)
 
 
 def _output_stem(output: str, default_name: str) -> str:
