@@ -21,7 +21,7 @@ from nmmm.appearance.render import DirectionalLight, PinholeCamera, render_plate
 from nmmm.appearance.sparkle import sparkle_graininess
 from nmmm.appearance.sparkle_prediction import (
     glint_footprint_statistics,
-    pixel_footprint_mm2,
+    plate_light_geometry,
     predicted_graininess,
     predicted_sparkle,
 )
@@ -43,14 +43,11 @@ def _measure_and_predict(plate, cam, illumination_deg, n_sim=12):
     light = DirectionalLight.from_angles(illumination_deg, 90.0, 1.0, 1.0)
     img = render_plate(plate, cam, light, wavelength_nm=W550, glint_spread_deg=1.0)
     measured = sparkle_graininess(img.radiance[..., 0].astype(float), PIXEL_UM)
-    A, P = pixel_footprint_mm2(cam)
-    wo = np.asarray(cam.position_mm) - P
-    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
-    wi = np.broadcast_to(np.asarray(light.direction), wo.shape)
+    A, P, wi, wo, E = plate_light_geometry(cam, light)
     brdf = plate.smooth_brdf
 
     def ev(comps):
-        return brdf.evaluate(W550, wi.reshape(-1, 3), wo.reshape(-1, 3), components=comps)[:, 0].reshape(A.shape) * wi[..., 2]
+        return brdf.evaluate(W550, wi.reshape(-1, 3), wo.reshape(-1, 3), components=comps)[:, 0].reshape(A.shape) * E
 
     smooth, flakes = ev(("specular", "base", "multiple")), ev(("flakes",))
     st = glint_footprint_statistics(brdf, plate.flakes, wi, wo, A, glint_spread_deg=1.0)

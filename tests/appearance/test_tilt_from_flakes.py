@@ -137,7 +137,7 @@ def test_recipe_coat_glints_are_its_brdf(grey_plate, distance_mm):
     """Region by region, the mean glint radiance of the recipe's flakes equals the flake term
     of its statistical BRDF (through the glint lobe) within 4 standard errors."""
     from nmmm.appearance.render import PinholeCamera, PointLight, render_plate
-    from nmmm.appearance.sparkle_prediction import glint_footprint_statistics, pixel_footprint_mm2
+    from nmmm.appearance.sparkle_prediction import glint_footprint_statistics, plate_light_geometry
 
     plate, _ = grey_plate
     light = PointLight((0.0, 80.0, 100.0), 1.0, intensity=1.0)
@@ -145,14 +145,8 @@ def test_recipe_coat_glints_are_its_brdf(grey_plate, distance_mm):
     cam = PinholeCamera((0.0, -distance_mm * np.sin(t), distance_mm * np.cos(t)), (0.0, 0.0, 0.0),
                         fov_deg=12.0 * 600.0 / distance_mm, resolution=(240, 160))
     img = render_plate(plate, cam, light, wavelength_nm=W550, glint_spread_deg=1.0)
-    A, P = pixel_footprint_mm2(cam)
+    A, P, wi, wo, E = plate_light_geometry(cam, light)
     H, Wd = A.shape
-    wo = np.asarray(cam.position_mm) - P
-    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
-    v = np.asarray(light.position_mm) - P
-    r = np.linalg.norm(v, axis=-1)
-    wi = v / r[..., None]
-    E = wi[..., 2] / (r * 1e-3) ** 2
     brdf = plate.smooth_brdf
     ev = lambda comps: brdf.evaluate(W550, wi.reshape(-1, 3), wo.reshape(-1, 3), components=comps)[:, 0].reshape(H, Wd) * E
     z = (img.radiance[..., 0] - ev(("specular", "base", "multiple"))) / ev(("flakes",))
@@ -193,7 +187,7 @@ def test_recipe_coat_glints_near_specular_are_its_brdf(which, request):
     agree; that the estimate is the flakes' law is test_recipe_coat_tilt_is_its_flakes."""
     from nmmm.appearance.flakes import refract_in
     from nmmm.appearance.render import PinholeCamera, PointLight, render_plate
-    from nmmm.appearance.sparkle_prediction import glint_footprint_statistics, pixel_footprint_mm2
+    from nmmm.appearance.sparkle_prediction import glint_footprint_statistics, plate_light_geometry
 
     plate, _ = request.getfixturevalue(which)
     t = np.radians(30.0)
@@ -201,14 +195,8 @@ def test_recipe_coat_glints_near_specular_are_its_brdf(which, request):
     cam = PinholeCamera((0.0, -400.0 * np.sin(t), 400.0 * np.cos(t)), (0.0, 0.0, 0.0), fov_deg=16.0,
                         resolution=(240, 160))
     img = render_plate(plate, cam, light, wavelength_nm=W550, glint_spread_deg=1.0)
-    A, P = pixel_footprint_mm2(cam)
+    A, P, wi, wo, E = plate_light_geometry(cam, light)
     H, Wd = A.shape
-    wo = np.asarray(cam.position_mm) - P
-    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
-    v = np.asarray(light.position_mm) - P
-    r = np.linalg.norm(v, axis=-1)
-    wi = v / r[..., None]
-    E = wi[..., 2] / (r * 1e-3) ** 2
     brdf = plate.smooth_brdf
     ev = lambda comps: brdf.evaluate(W550, wi.reshape(-1, 3), wo.reshape(-1, 3), components=comps)[:, 0].reshape(H, Wd) * E
     z = (img.radiance[..., 0] - ev(("specular", "base", "multiple"))) / ev(("flakes",))

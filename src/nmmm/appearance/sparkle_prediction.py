@@ -79,7 +79,7 @@ from nmmm.spectra import check_finite
 
 __all__ = ["GlintFootprintStatistics", "glint_footprint_statistics", "lobe_integrals", "simulate_glint_pixels",
            "predicted_graininess", "predicted_sparkle", "variance_standard_error", "pixel_footprint_mm2",
-           "sparkle_from_composition"]
+           "plate_light_geometry", "sparkle_from_composition"]
 
 #: the renderer's lobe cut (in units of σ_g)
 LOBE_CUT = 3.0
@@ -442,6 +442,26 @@ def pixel_footprint_mm2(camera) -> tuple[np.ndarray, np.ndarray]:
     a = Pc[1:, 1:] - Pc[:-1, :-1]
     b = Pc[:-1, 1:] - Pc[1:, :-1]
     return 0.5 * np.abs(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]), P
+
+
+def plate_light_geometry(camera, light) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(A, P, wi, wo, E)`` of a pinhole camera's pixels on the plate z = 0 and one light: the
+    footprints A (H, W) mm² and points P (H, W, 3) of :func:`pixel_footprint_mm2`, the unit
+    directions wi to the light and wo to the camera (H, W, 3), and E (H, W) = cos θi / r² (r in m)
+    for a point light (``position_mm``) or cos θi for a directional one (``direction``) — times the
+    light's spectral intensity (irradiance) it is the plate's irradiance."""
+    A, P = pixel_footprint_mm2(camera)
+    wo = np.asarray(camera.position_mm, float) - P
+    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
+    if hasattr(light, "position_mm"):
+        v = np.asarray(light.position_mm, float) - P
+        r = np.linalg.norm(v, axis=-1)
+        wi = v / r[..., None]
+        E = wi[..., 2] / (r * 1e-3) ** 2
+    else:
+        wi = np.broadcast_to(np.asarray(light.direction, float), wo.shape)
+        E = wi[..., 2]
+    return A, P, wi, wo, E
 
 
 def sparkle_from_composition(paint, flakes, illumination_deg=(15.0, 45.0, 75.0), pixel_size_um: float = 40.0,

@@ -96,20 +96,15 @@ def _variance_check(plate, cam, light, spread=1.0, bands=4):
     from nmmm.appearance.render import render_plate
     from nmmm.appearance.sparkle_prediction import (
         glint_footprint_statistics,
-        pixel_footprint_mm2,
+        plate_light_geometry,
         variance_standard_error,
     )
 
     w = np.array([550.0])
     img = render_plate(plate, cam, light, wavelength_nm=w, glint_spread_deg=spread)
-    A, P = pixel_footprint_mm2(cam)
+    A, P, wi, wo, E = plate_light_geometry(cam, light)
     H, W = A.shape
-    wo = np.asarray(cam.position_mm) - P
-    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
-    v = np.asarray(light.position_mm) - P
-    r = np.linalg.norm(v, axis=-1)
-    wi = v / r[..., None]
-    E = wi[..., 2] / (r * 1e-3) ** 2 * float(light.spectral(w)[0])  # plane irradiance at 550 nm
+    E = E * float(light.spectral(w)[0])  # plane irradiance at 550 nm
     brdf = plate.smooth_brdf
 
     def ev(comps):

@@ -190,18 +190,13 @@ def _aspecular_range(cam, lights):
     """Aspecular angle (degrees, per pixel) of the first light with a
     position or direction (the booth's source, the sun) — the angle between the view ray mirrored
     at the plate (plate frame) and the direction to the light; None without such a light."""
-    from nmmm.appearance.sparkle_prediction import pixel_footprint_mm2
+    from nmmm.appearance.sparkle_prediction import plate_light_geometry
 
     lt = next((x for x in lights if hasattr(x, "position_mm") or hasattr(x, "direction")), None)
     if lt is None:
         return None
-    _, P = pixel_footprint_mm2(cam)
-    wo = np.asarray(cam.position_mm, float) - P
-    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
+    _, _, wi, wo, _ = plate_light_geometry(cam, lt)
     m = wo * np.array([-1.0, -1.0, 1.0])  # the mirror direction of the view ray
-    wi = (np.asarray(lt.position_mm, float) - P) if hasattr(lt, "position_mm") else np.broadcast_to(
-        np.asarray(lt.direction, float), P.shape)
-    wi = wi / np.linalg.norm(wi, axis=-1, keepdims=True)
     return np.degrees(np.arccos(np.clip(np.sum(m * wi, axis=-1), -1.0, 1.0)))
 
 

@@ -17,7 +17,7 @@ import pytest
 from nmmm.appearance.render import PinholeCamera, PointLight, render_plate, seed_metallic_plate
 from nmmm.appearance.sparkle_prediction import (
     glint_footprint_statistics,
-    pixel_footprint_mm2,
+    plate_light_geometry,
     variance_standard_error,
 )
 
@@ -31,14 +31,8 @@ def plate():
 
 def _glints_over_model(plate, cam, light, spread=1.0):  # noqa: D401 - helper
     img = render_plate(plate, cam, light, wavelength_nm=W550, glint_spread_deg=spread)
-    A, P = pixel_footprint_mm2(cam)
+    A, P, wi, wo, E = plate_light_geometry(cam, light)
     H, Wd = A.shape
-    wo = np.asarray(cam.position_mm) - P
-    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
-    v = np.asarray(light.position_mm) - P
-    r = np.linalg.norm(v, axis=-1)
-    wi = v / r[..., None]
-    E = wi[..., 2] / (r * 1e-3) ** 2
     brdf = plate.smooth_brdf
     ev = lambda comps: brdf.evaluate(W550, wi.reshape(-1, 3), wo.reshape(-1, 3), components=comps)[:, 0].reshape(H, Wd) * E
     smooth = ev(("specular", "base", "multiple"))
@@ -182,14 +176,9 @@ def _check_pigmented_glints(plate):
     glints = np.zeros(cam.resolution[::-1] + (W_RGB.size,))
     plate_module._render_glints(plate, cam, [light], [light.spectral(W_RGB)], W_RGB, math.radians(1.0), Ph[on],
                                 glints)
-    A, P = pixel_footprint_mm2(cam)
+    A, P, wi, wo, E = plate_light_geometry(cam, light)
     H, Wd = A.shape
-    wo = np.asarray(cam.position_mm) - P
-    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
-    v = np.asarray(light.position_mm) - P
-    r = np.linalg.norm(v, axis=-1)
-    wi = v / r[..., None]
-    E = (wi[..., 2] / (r * 1e-3) ** 2)[..., None]
+    E = E[..., None]
     brdf = plate.smooth_brdf
 
     def ev(comps):
@@ -252,13 +241,7 @@ def test_rough_faced_grey_metallic_image_low_passes_to_its_brdf():
                         resolution=(240, 160))
     z, on, st = _glints_over_model(plate, cam, light)
     img = render_plate(plate, cam, light, wavelength_nm=W550, glint_spread_deg=1.0)
-    A, P = pixel_footprint_mm2(cam)
-    wo = np.asarray(cam.position_mm) - P
-    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
-    v = np.asarray(light.position_mm) - P
-    r = np.linalg.norm(v, axis=-1)
-    wi = v / r[..., None]
-    E = wi[..., 2] / (r * 1e-3) ** 2
+    A, P, wi, wo, E = plate_light_geometry(cam, light)
     full = plate.smooth_brdf.evaluate(W550, wi.reshape(-1, 3), wo.reshape(-1, 3))[:, 0].reshape(A.shape) * E
     stat = plate.smooth_brdf.evaluate(W550, wi.reshape(-1, 3), wo.reshape(-1, 3),
                                       components=("flakes",))[:, 0].reshape(A.shape) * E
