@@ -96,20 +96,21 @@ def bench_plate(quick: bool, repeat: int = 5):
     return rows
 
 
-def per_pixel(quick: bool, repeat: int = 5):
-    """(per-pixel path evaluations/s, kernel evaluations/s) on the same pixel pairs."""
+def per_pixel_pair(res):
+    """``(path, kernel, n)`` for the per-pixel measure at resolution ``res``: ``path()`` renders the
+    whole image (geometry, metallic BRDF at every pixel, sky, background, white reference) and
+    ``kernel()`` runs the fused BRDF kernel alone on the same pixel pairs into a preallocated array;
+    ``n`` BRDF evaluations each (shared with ``run_all.py``'s ``render`` row)."""
     from nmmm.appearance.brdf.paint_brdf import _check_components
     from nmmm.appearance.render import DirectionalLight, PaintedPlate, UniformEnvironment, render_plate, seed_metallic_plate
     from nmmm.appearance.render.plate.renderer import _plate_hits
 
-    res = (512, 341) if quick else (1024, 683)
     w = np.linspace(380.0, 780.0, 81)
     cam = camera(res)
-    metallic = seed_metallic_plate()
-    smooth = PaintedPlate(metallic.smooth_brdf, size_mm=metallic.size_mm)
+    metallic = seed_metallic_plate(cells=(4, 4))  # only its smooth BRDF is used: no glints
+    smooth = PaintedPlate(metallic.smooth_brdf, size_mm=(150.0, 100.0))
     light = DirectionalLight.from_angles(35.0, 90.0, "D65")
     sky = UniformEnvironment("D65", 0.01)
-    t_path, _ = timings(lambda: render_plate(smooth, cam, light, sky, wavelength_nm=w, coarse_step=1), repeat)
     dirs = cam.pixel_directions().reshape(-1, 3)
     hit, _ = _plate_hits(cam, dirs)
     wo = -dirs
@@ -120,8 +121,22 @@ def per_pixel(quick: bool, repeat: int = 5):
     tab = smooth.brdf.prepare(w)
     out = np.empty((wo.shape[0], w.size), np.float32)
     comps = _check_components(("specular", "flakes", "base", "multiple"))
-    t_kernel, _ = timings(lambda: tab.evaluate_fast(wi, wo, comps, out), repeat)
-    n = res[0] * res[1] * w.size
+
+    def path():
+        return render_plate(smooth, cam, light, sky, wavelength_nm=w, coarse_step=1)
+
+    def kernel():
+        tab.evaluate_fast(wi, wo, comps, out)
+
+    return path, kernel, res[0] * res[1] * w.size
+
+
+def per_pixel(quick: bool, repeat: int = 5):
+    """(per-pixel path evaluations/s, kernel evaluations/s) on the same pixel pairs."""
+    res = (512, 341) if quick else (1024, 683)
+    path, kernel, n = per_pixel_pair(res)
+    t_path, _ = timings(path, repeat)
+    t_kernel, _ = timings(kernel, repeat)
     print(f"  per-pixel path ({res[0]}x{res[1]} pixels x 81 wavelengths, metallic BRDF at every pixel, no glints): "
           f"{t_path:6.2f} s = {n / t_path / 1e6:6.1f} M evaluations/s")
     print(f"  the fused BRDF kernel alone on the same pairs          : {t_kernel:6.2f} s = {n / t_kernel / 1e6:6.1f} M "

@@ -373,48 +373,16 @@ def case_brdf(scale, threads):
 
 
 def case_render(scale, threads):
-    import numpy as np
-
-    from nmmm.appearance.brdf.paint_brdf import _check_components
-    from nmmm.appearance.render import (
-        DirectionalLight,
-        PaintedPlate,
-        PinholeCamera,
-        UniformEnvironment,
-        render_plate,
-        seed_metallic_plate,
-    )
-    from nmmm.appearance.render.plate.renderer import _plate_hits
+    sys.path.insert(0, str(HERE))
+    from bench_render import per_pixel_pair
 
     res = (1024, 683) if scale == 1 else (512, 341)
-    w = np.linspace(380.0, 780.0, 81)
-    cam = PinholeCamera((0.0, -180.0, 420.0), (0.0, 0.0, 0.0), fov_deg=24.0, resolution=res)
-    metallic = seed_metallic_plate(cells=(4, 4))
-    plate = PaintedPlate(metallic.smooth_brdf, size_mm=(150.0, 100.0))
-    light = DirectionalLight.from_angles(35.0, 90.0, "D65")
-    sky = UniformEnvironment("D65", 0.01)
-    dirs = cam.pixel_directions().reshape(-1, 3)
-    hit, _ = _plate_hits(cam, dirs)
-    wo = -dirs
-    wo[~hit] = (0.0, 0.0, 1.0)
-    wo[:, 2] = np.maximum(wo[:, 2], 0.0)
-    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
-    wi = np.ascontiguousarray(np.broadcast_to(np.asarray(light.direction), wo.shape))
-    tab = plate.brdf.prepare(w)
-    out = np.empty((wo.shape[0], w.size), np.float32)
-    comps = _check_components(("specular", "flakes", "base", "multiple"))
-
-    def ours():  # the whole image: geometry, BRDF at every pixel, sky, background, white reference
-        return render_plate(plate, cam, light, sky, wavelength_nm=w, coarse_step=1)
-
-    def rival():  # the fused BRDF kernel alone on the same pixel pairs, into a preallocated array
-        tab.evaluate_fast(wi, wo, comps, out)
+    ours, rival, n = per_pixel_pair(res)  # the whole image / the fused BRDF kernel alone, same pixel pairs
 
     def check():
-        n = res[0] * res[1] * w.size
         return f"{n / 1e6:.1f} M evaluations per image; ratio = share of the kernel's rate the path keeps"
 
-    return f"plate render per-pixel path {res[0]}×{res[1]} × 81 λ (metallic BRDF)", res[0] * res[1] * w.size, ours, \
+    return f"plate render per-pixel path {res[0]}×{res[1]} × 81 λ (metallic BRDF)", n, ours, \
         [("floor: nmmm's BRDF kernel alone, same pixel pairs (the issue's measure)", rival)], check
 
 
