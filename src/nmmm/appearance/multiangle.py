@@ -18,14 +18,35 @@ specular side (γ = 45°: along the normal; γ = 110°: 65° on the illuminator'
 - :data:`GEOMETRY_SETS` — named geometry sets ``{illumination_deg: aspecular angles}`` of the
   standards and of commercial instruments, each with its source in :data:`GEOMETRY_SOURCES`;
   :func:`multiangle_lab_set` evaluates one set (one :class:`MultiAngleColour` per illumination).
-  Only sets whose angles were found in a source are listed (the X-Rite MA98 / MA-T12 sets with
-  15° illumination are not, for want of a source read here).
-- :func:`aspecular_directions` — (ωi, ωo) unit vectors for given aspecular angles.
+  Only sets whose angles were found in a source are listed (see *Not listed* below).
+- :func:`aspecular_directions` — (ωi, ωo) unit vectors for given aspecular angles, in the plane
+  of incidence or out of it (``azimuth_deg``: the viewing direction turned about the specular
+  direction, see below).
 - :func:`multiangle_reflectance` — reflectance factors R = π f at those geometries.
 - :func:`multiangle_lab` -> :class:`MultiAngleColour` (L*, a*, b*, C*, h per angle).
 - :func:`flop_index` with :data:`FLOP_INDEX_METHODS` (``"Alman 1987"``, the X-Rite /
   DuPont flop index FI = 2.69 (L*15 − L*110)^1.11 / (L*45)^0.86).
 - :func:`plot_colour_travel` — a*b* trajectory, L* against aspecular angle, swatches.
+
+Out-of-plane geometries
+-----------------------
+Some instruments also view out of the plane of incidence. Here such a geometry is written
+(θi, γ, φ): the viewing direction makes the angle γ with the specular direction and is turned
+by φ about it, φ = 0 being the in-plane side of positive γ (towards the normal and the
+illuminator) and φ = +90° the +y side (the plane of incidence is xz, light from +x)::
+
+    ωo = cos γ · r + sin γ · (cos φ · t + sin φ · ŷ),   r = (−sin θi, 0, cos θi),
+    t = (cos θi, 0, sin θi)
+
+so φ = 0 is the in-plane geometry above and (γ, 180°) is (−γ, 0). This parametrisation is this
+module's own; ASTM E2175's out-of-plane notation was not read here and no commercial
+out-of-plane set is listed (none was found in a citable source).
+
+*Not listed*, for want of a source read here (a search of stored standards, vendor and paper
+pages, public code and issues): the X-Rite MA98, MA-T6 and MA-T12 geometry sets (15° and 45°
+illumination, the MA98's out-of-plane detectors), the 15° illumination set of ASTM E2539, the
+geometries and colour-difference formula of DIN 6175-2 / DIN 6175:2019, and any flop formula
+other than Alman's with its coefficients as published.
 
 References
 ----------
@@ -94,38 +115,63 @@ GEOMETRY_SOURCES = {
 }
 
 
-def aspecular_directions(aspecular_deg, illumination_deg: float = 45.0):
+def aspecular_directions(aspecular_deg, illumination_deg: float = 45.0, azimuth_deg=0.0):
     """Incident and viewing unit vectors for aspecular angles γ (deg).
 
     The plane of incidence is xz; the light comes from +x (``wi`` = (sin θi, 0, cos θi)),
-    the specular direction is on −x. The viewing direction makes θ_v = θi − γ with the
-    normal, on the specular side for θ_v > 0. Returns ``(wi (3,), wo (K, 3))``; a
-    geometry below the horizon (|θi − γ| ≥ 90°) raises :class:`InvalidInputError`.
+    the specular direction r = (−sin θi, 0, cos θi) is on −x. In the plane (``azimuth_deg``
+    = 0, the default) the viewing direction makes θ_v = θi − γ with the normal, on the
+    specular side for θ_v > 0. Out of the plane, ``azimuth_deg`` φ (broadcast against γ)
+    turns the viewing direction about r: ωo = cos γ r + sin γ (cos φ t + sin φ ŷ) with
+    t = (cos θi, 0, sin θi), the in-plane direction of positive γ (module docstring).
+    Returns ``(wi (3,), wo (K, 3))``; a geometry below the horizon raises
+    :class:`InvalidInputError`.
     """
     g = np.atleast_1d(check_finite(aspecular_deg, "aspecular_deg")).astype(float)
     ti = float(check_finite(illumination_deg, "illumination_deg"))
     if not 0 <= ti < 90:
         raise InvalidInputError(f"illumination_deg must lie in [0, 90), got {ti}")
-    tv = ti - g
-    if np.any(np.abs(tv) >= 90):
-        bad = g[np.abs(tv) >= 90]
+    phi = np.atleast_1d(check_finite(azimuth_deg, "azimuth_deg")).astype(float)
+    try:
+        g, phi = np.broadcast_arrays(g, phi)
+    except ValueError:
         raise InvalidInputError(
-            f"aspecular angle(s) {bad.tolist()} put the detector below the surface at {ti}° illumination; "
-            f"choose γ in ({ti - 90:g}, {ti + 90:g})"
+            f"azimuth_deg (shape {phi.shape}) must be one value or one per aspecular angle (shape {g.shape})"
+        ) from None
+    g, phi = g.ravel(), phi.ravel()
+    ri, rg, rp = np.radians(ti), np.radians(g), np.radians(phi)
+    wi = np.array([np.sin(ri), 0.0, np.cos(ri)])
+    r = np.array([-np.sin(ri), 0.0, np.cos(ri)])
+    t = np.array([np.cos(ri), 0.0, np.sin(ri)])
+    y = np.array([0.0, 1.0, 0.0])
+    wo = (np.cos(rg)[:, None] * r
+          + np.sin(rg)[:, None] * (np.cos(rp)[:, None] * t + np.sin(rp)[:, None] * y))
+    in_plane = np.mod(phi, 180.0) == 0.0
+    # in the plane (φ = 0 or 180°), write the direction exactly as θ_v = θi ∓ γ: no rounding off the plane
+    tv = np.radians(ti - g * np.where(np.mod(phi, 360.0) == 0.0, 1.0, -1.0))
+    wo[in_plane] = np.stack([-np.sin(tv), np.zeros_like(tv), np.cos(tv)], axis=-1)[in_plane]
+    below = wo[:, 2] <= 1e-12
+    if np.any(below):
+        if np.all(phi[below] == 0):
+            raise InvalidInputError(
+                f"aspecular angle(s) {g[below].tolist()} put the detector below the surface at {ti}° illumination; "
+                f"choose γ in ({ti - 90:g}, {ti + 90:g})"
+            )
+        raise InvalidInputError(
+            f"(aspecular, azimuth) geometries {list(zip(g[below].tolist(), phi[below].tolist()))} put the detector "
+            f"below the surface at {ti}° illumination (viewing direction z ≤ 0)"
         )
-    r = np.radians(tv)
-    wi = np.array([np.sin(np.radians(ti)), 0.0, np.cos(np.radians(ti))])
-    wo = np.stack([-np.sin(r), np.zeros_like(r), np.cos(r)], axis=-1)
     return wi, wo
 
 
 def multiangle_reflectance(brdf, wavelength_nm, aspecular_deg=ASTM_E2539_ASPECULAR_DEG,
-                           illumination_deg: float = 45.0) -> np.ndarray:
+                           illumination_deg: float = 45.0, azimuth_deg=0.0) -> np.ndarray:
     """Spectral reflectance factors R(γ, λ) = π f(λ, ωi, ωo) (relative to the perfect
-    diffuser) at the aspecular angles -> (K, L). The specular Dirac of a smooth coat is
-    never seen at these geometries (γ ≠ 0)."""
+    diffuser) at the aspecular angles -> (K, L); ``azimuth_deg`` as in
+    :func:`aspecular_directions` (0: in the plane of incidence). The specular Dirac of a
+    smooth coat is never seen at these geometries (γ ≠ 0)."""
     w = as_wavelength_nm(wavelength_nm)
-    wi, wo = aspecular_directions(aspecular_deg, illumination_deg)
+    wi, wo = aspecular_directions(aspecular_deg, illumination_deg, azimuth_deg)
     return np.pi * np.asarray(brdf(w, wi, wo), float)
 
 
@@ -138,7 +184,9 @@ def _spectra_to_lab(w, R, illuminant, observer):
 
 @dataclass(frozen=True)
 class MultiAngleColour:
-    """CIELAB at several aspecular angles (one row per angle)."""
+    """CIELAB at several aspecular angles (one row per angle). ``azimuth_deg`` (one per
+    row, out of the plane of incidence when ≠ 0, see :func:`aspecular_directions`) is
+    ``None`` for an in-plane set."""
 
     aspecular_deg: np.ndarray
     illumination_deg: float
@@ -149,6 +197,12 @@ class MultiAngleColour:
     illuminant: str
     observer: str
     name: str = ""
+    azimuth_deg: np.ndarray | None = None
+
+    @property
+    def azimuths(self) -> np.ndarray:
+        """Azimuth of each row (deg); zeros for an in-plane set."""
+        return np.zeros(len(self.aspecular_deg)) if self.azimuth_deg is None else np.asarray(self.azimuth_deg)
 
     @property
     def L(self):
@@ -162,12 +216,15 @@ class MultiAngleColour:
     def hue_deg(self):
         return np.degrees(np.arctan2(self.lab[:, 2], self.lab[:, 1])) % 360.0
 
-    def lightness_at(self, aspecular_deg: float) -> float:
-        """L* at one of the measured aspecular angles."""
-        k = np.flatnonzero(np.isclose(self.aspecular_deg, aspecular_deg))
+    def lightness_at(self, aspecular_deg: float, azimuth_deg: float = 0.0) -> float:
+        """L* at one of the measured aspecular angles (in the plane of incidence unless
+        ``azimuth_deg`` says otherwise)."""
+        k = np.flatnonzero(np.isclose(self.aspecular_deg, aspecular_deg) & np.isclose(self.azimuths, azimuth_deg))
         if k.size == 0:
+            avail = (self.aspecular_deg.tolist() if self.azimuth_deg is None
+                     else list(zip(self.aspecular_deg.tolist(), self.azimuths.tolist())))
             raise InvalidInputError(
-                f"aspecular angle {aspecular_deg}° was not measured; available: {self.aspecular_deg.tolist()}"
+                f"aspecular angle {aspecular_deg}° at azimuth {azimuth_deg}° was not measured; available: {avail}"
             )
         return float(self.lab[k[0], 0])
 
@@ -175,24 +232,41 @@ class MultiAngleColour:
         return flop_index(self, method=method)
 
     def table(self) -> list[dict]:
-        """Rows (aspecular_deg, L, a, b, C, h_deg) for reports/CSV."""
-        return [dict(aspecular_deg=float(g), L=float(l), a=float(a), b=float(b), C=float(c), h_deg=float(h))
-                for g, (l, a, b), c, h in zip(self.aspecular_deg, self.lab, self.chroma, self.hue_deg)]
+        """Rows (aspecular_deg, L, a, b, C, h_deg) for reports/CSV; an out-of-plane set adds
+        azimuth_deg after aspecular_deg."""
+        rows = []
+        for g, p, (l, a, b), c, h in zip(self.aspecular_deg, self.azimuths, self.lab, self.chroma, self.hue_deg):
+            row = dict(aspecular_deg=float(g))
+            if self.azimuth_deg is not None:
+                row["azimuth_deg"] = float(p)
+            rows.append(dict(row, L=float(l), a=float(a), b=float(b), C=float(c), h_deg=float(h)))
+        return rows
 
 
 def multiangle_lab(brdf, wavelength_nm, aspecular_deg=ASTM_E2539_ASPECULAR_DEG, illumination_deg: float = 45.0,
-                   illuminant: str = "D65", observer: str = "10") -> MultiAngleColour:
+                   illuminant: str = "D65", observer: str = "10", azimuth_deg=None) -> MultiAngleColour:
     """CIELAB of the paint at the aspecular angles (D65 / CIE 1964 10° by default, as
-    multi-angle instruments report), from :mod:`nmmm.colour`.
+    multi-angle instruments report), from :mod:`nmmm.colour`. ``azimuth_deg`` (one value,
+    or one per angle) views out of the plane of incidence (:func:`aspecular_directions`);
+    ``None`` (default) is the in-plane set.
 
     L* above 100 is normal near the specular direction of effect paints (reflectance
     factor > 1)."""
     w = as_wavelength_nm(wavelength_nm)
     g = np.atleast_1d(np.asarray(aspecular_deg, float))
-    R = multiangle_reflectance(brdf, w, g, illumination_deg)
+    phi = None
+    if azimuth_deg is not None:
+        phi = np.atleast_1d(np.asarray(azimuth_deg, float))
+        try:
+            g, phi = (np.ravel(a).copy() for a in np.broadcast_arrays(g, phi))
+        except ValueError:
+            raise InvalidInputError(
+                f"azimuth_deg (shape {phi.shape}) must be one value or one per aspecular angle (shape {g.shape})"
+            ) from None
+    R = multiangle_reflectance(brdf, w, g, illumination_deg, 0.0 if phi is None else phi)
     xyz, lab = _spectra_to_lab(w, R, illuminant, observer)
     return MultiAngleColour(g, float(illumination_deg), w, R, np.asarray(xyz), np.asarray(lab), illuminant,
-                            str(observer), getattr(brdf, "name", ""))
+                            str(observer), getattr(brdf, "name", ""), phi)
 
 
 def multiangle_lab_set(brdf, wavelength_nm, geometry: str = "ASTM E2539 (45° illumination)", illuminant: str = "D65",
@@ -265,18 +339,20 @@ def plot_colour_travel(colours, path=None, title: str = "Colour travel"):
     for k, c in enumerate(colours):
         lab = c.lab
         line, = ax_ab.plot(lab[:, 1], lab[:, 2], "o-", label=c.name or f"paint {k}")
-        for g, a, b in zip(c.aspecular_deg, lab[:, 1], lab[:, 2]):
-            ax_ab.annotate(f"{g:g}°", (a, b), textcoords="offset points", xytext=(4, 4), fontsize=7,
+        labels = [f"{g:g}°" if c.azimuth_deg is None else f"{g:g}°/az {p:g}°"
+                  for g, p in zip(c.aspecular_deg, c.azimuths)]
+        for t, a, b in zip(labels, lab[:, 1], lab[:, 2]):
+            ax_ab.annotate(t, (a, b), textcoords="offset points", xytext=(4, 4), fontsize=7,
                            color=line.get_color())
         ax_l.plot(c.aspecular_deg, lab[:, 0], "o-", color=line.get_color(), label=c.name or f"paint {k}")
         # swatches: display-referred sRGB, exposure so that the brightest angle fits
         Y = np.clip(c.xyz[:, 1].max() / 100.0, 1e-6, None)
         white = white_point(c.wavelength_nm, c.illuminant, c.observer)
         rgb = np.clip(xyz_to_srgb(c.xyz / max(Y, 1.0), white_xyz=white), 0, 1)
-        for j, g in enumerate(c.aspecular_deg):
+        for j, t in enumerate(labels):
             ax_sw.add_patch(plt.Rectangle((j, -k - 1), 0.95, 0.9, color=rgb[j]))
             if k == 0:
-                ax_sw.text(j + 0.47, 0.1, f"{g:g}°", ha="center", fontsize=7)
+                ax_sw.text(j + 0.47, 0.1, t, ha="center", fontsize=7)
     ax_ab.axhline(0, color="0.8", lw=0.5)
     ax_ab.axvline(0, color="0.8", lw=0.5)
     ax_ab.set_xlabel("a* (1)")
