@@ -198,29 +198,96 @@ NEGATIVE_TOLERANCE = 1e-6
 _FUSED_MIN_SIZE = 1 << 18  # below ~0.25 M values the NumPy checks + BLAS product cost no more
 
 
+#: LLVM may reorder the sums (SIMD lanes, FMA); the checks' comparisons keep their NaN semantics
+#: (no 'nnan'/'ninf' flags: a NaN must still be counted)
+_SUM_FASTMATH = {"reassoc", "contract"}
+
+
+@numba.njit(cache=True, nogil=True, fastmath=_SUM_FASTMATH)
+def _checked_row_sums(v, i, Wt, tolerance):  # pragma: no cover - compiled
+    """(X, Y, Z, bad) of row ``i`` of the spectra ``v`` (M, N) with the weights ``Wt`` (3, N):
+    the three sums and, in the same read, the count of values that are not finite or below
+    ``-tolerance``. Vectorised over wavelength (reassociated sums: rounding like BLAS's)."""
+    x = 0.0
+    y = 0.0
+    z = 0.0
+    bad = 0
+    for j in range(v.shape[1]):
+        r = v[i, j]
+        bad += not ((r >= -tolerance) & (r < np.inf))  # NaN, ±inf and negatives
+        x += r * Wt[0, j]
+        y += r * Wt[1, j]
+        z += r * Wt[2, j]
+    return x, y, z, bad
+
+
 @numba.njit(parallel=True, cache=True)
-def _checked_weighted_sums(v, W, tolerance, out):  # pragma: no cover - compiled
-    """``out = v @ W`` for (M, N) spectra and (N, 3) weights, and in the same pass over the
+def _checked_weighted_sums(v, Wt, tolerance, out):  # pragma: no cover - compiled
+    """``out = v @ Wt.T`` for (M, N) spectra and (3, N) weights, and in the same pass over the
     spectra the count of values that are not finite or below ``-tolerance`` (the input checks
     of :func:`spectra_to_xyz`): one read of the data instead of three (issue 22)."""
     bad = 0
     for i in numba.prange(v.shape[0]):
-        x = 0.0
-        y = 0.0
-        z = 0.0
-        b = 0
-        for j in range(v.shape[1]):
-            r = v[i, j]
-            if not (r >= -tolerance and r < np.inf):  # False for NaN, ±inf and negatives
-                b += 1
-            x += r * W[j, 0]
-            y += r * W[j, 1]
-            z += r * W[j, 2]
+        x, y, z, b = _checked_row_sums(v, i, Wt, tolerance)
         out[i, 0] = x
         out[i, 1] = y
         out[i, 2] = z
         bad += b
     return bad
+
+
+@numba.njit(cache=True, nogil=True)
+def _lab_f(t):  # pragma: no cover - compiled
+    """CIE 1976 f(t) as colour-science writes it (``intermediate_lightness_function_CIE1976``)."""
+    return t ** (1.0 / 3.0) if t > (24.0 / 116.0) ** 3 else (841.0 / 108.0) * t + 16.0 / 116.0
+
+
+@numba.njit(parallel=True, cache=True)
+def _checked_lab(v, Wt, tolerance, y_white, xyz_n, out):  # pragma: no cover - compiled
+    """CIELAB of each row of ``v`` in the same pass as :func:`_checked_weighted_sums`: XYZ / ``y_white``
+    against the white ``xyz_n`` (Y_n = 1), CIE 015:2018 as colour-science's ``XYZ_to_Lab``
+    computes it; returns the count of refused values (then ``out`` is not to be used)."""
+    bad = 0
+    for i in numba.prange(v.shape[0]):
+        x, y, z, b = _checked_row_sums(v, i, Wt, tolerance)
+        fx = _lab_f((x / y_white) / xyz_n[0])
+        fy = _lab_f((y / y_white) / xyz_n[1])
+        fz = _lab_f((z / y_white) / xyz_n[2])
+        out[i, 0] = 116.0 * fy - 16.0
+        out[i, 1] = 500.0 * (fx - fy)
+        out[i, 2] = 200.0 * (fy - fz)
+        bad += b
+    return bad
+
+
+def _fused_applies(values, W) -> bool:
+    """Large C-contiguous float64 stacks on W's grid go through the fused kernels."""
+    return (isinstance(values, np.ndarray) and values.dtype == np.float64 and values.ndim >= 2
+            and values.size >= _FUSED_MIN_SIZE and values.shape[-1] == W.shape[0] and values.flags.c_contiguous)
+
+
+def _fused_xyz_or_lab(values, W, lab: bool = False):
+    """XYZ (or CIELAB, white W.sum(0)) of ``values`` through the fused check-and-sum kernels, or
+    None when they do not apply or found a NaN, an infinity or a negative value (the NumPy checks
+    of :func:`spectra_to_xyz` then name it)."""
+    if not _fused_applies(values, W):
+        return None
+    flat = values.reshape(-1, W.shape[0])
+    out = np.empty((flat.shape[0], 3))
+    Wt = np.ascontiguousarray(W.T)
+    if lab:
+        white = W.sum(axis=0)
+        bad = _checked_lab(flat, Wt, NEGATIVE_TOLERANCE, float(white[1]), _lab_white(white), out)
+    else:
+        bad = _checked_weighted_sums(flat, Wt, NEGATIVE_TOLERANCE, out)
+    return out.reshape(values.shape[:-1] + (3,)) if bad == 0 else None
+
+
+def _lab_white(white) -> np.ndarray:
+    """The white (X_n, 1, Z_n) as colour-science's ``XYZ_to_Lab`` rebuilds it from the white's xy."""
+    import colour
+
+    return np.asarray(colour.xy_to_XYZ(colour.XYZ_to_xy(white / white[1])), dtype=float)
 
 
 def spectra_to_xyz(wavelength_nm: ArrayLike, values: ArrayLike | None = None, illuminant: str = "D65",
@@ -239,13 +306,10 @@ def spectra_to_xyz(wavelength_nm: ArrayLike, values: ArrayLike | None = None, il
     """
     wavelength_nm, values = _split_spectral(wavelength_nm, values)
     W = weighting_factors(wavelength_nm, illuminant, observer)
-    if (isinstance(values, np.ndarray) and values.dtype == np.float64 and values.ndim >= 2
-            and values.size >= _FUSED_MIN_SIZE and values.shape[-1] == W.shape[0] and values.flags.c_contiguous):
-        flat = values.reshape(-1, W.shape[0])
-        out = np.empty((flat.shape[0], 3))
-        if _checked_weighted_sums(flat, np.ascontiguousarray(W), NEGATIVE_TOLERANCE, out) == 0:
-            return out.reshape(values.shape[:-1] + (3,))
-        # a NaN, an infinity or a negative value: the checks below name it
+    xyz = _fused_xyz_or_lab(values, W)
+    if xyz is not None:
+        return xyz
+    # small, other dtypes, or a NaN, an infinity or a negative value: the checks below name it
     v = check_finite(values, "spectra").astype(float, copy=False)
     if v.shape[-1] != W.shape[0]:
         raise InvalidInputError(f"spectra's last axis ({v.shape[-1]}) must match the wavelength grid ({W.shape[0]})")
