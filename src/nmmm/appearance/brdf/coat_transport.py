@@ -79,7 +79,7 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     c_m(θi, θo) of its lobe at up to 9 wavelength nodes (indices ``tab._ms_nodes``) are stored
     on ``tab._ms_modes_spectral`` ``(NA, NA, K, n_modes)``, linear in λ between nodes."""
     L, n = tab.L, tab.n
-    th, mu, sn, dmu = gauss_nodes(n_mu)
+    th, mu, sn, dmu = gauss_nodes(n_mu, tab.n)
     eye = np.eye(n_mu)
     z0, dz = tab.z0, tab.dz
     flakes = tab.has_flakes
@@ -93,6 +93,8 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
         fe = getattr(tab, "edge", 0.0)
         if fe > 0:  # rims: a fraction fe of the flake interactions scattered isotropically
             G *= 1.0 - fe
+        G_mirror = G[:, 0].copy() if fe > 0 else G[:, 0]  # (M+1, variant, j, k, L) upward, mirrors only: term 2's light
+        if fe > 0:
             iso = pigment_kernels(np.zeros(L), mu, sn, dmu, 0)[0] * mu[None, None, :, None]  # columns sum to 1
             for v, alb in enumerate((tab.edge_albedo, np.ones(L))):
                 G[0, :, v] += iso * (fe * target * alb[None, :])[None, None]
@@ -150,8 +152,9 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     ms = []
     for m in range(n_modes + 1):
         Mm = with_coat(system(m, 0, sel))
-        if flakes:  # one flake, no pigment scattering, straight to the coat's underside
-            Ku = np.moveaxis(G[m, 0, 0][..., sel], -1, 0)
+        if flakes:  # one flake mirror, no pigment scattering, straight to the coat's underside (term 2's
+            # light; a rim's light, scattered once, stays in the lobe as it stays in F_ms)
+            Ku = np.moveaxis(G_mirror[m, 0][..., sel], -1, 0)
             fs = fext[sel][:, :, None] + fext[sel][:, None, :]
             x = fs + kap[:, :, None] * dz * s2[None]
             Mm = Mm - Ku * tab.tau * np.exp(-kap[:, :, None] * z0 * s2[None]) * -np.expm1(-x) / np.where(x > 0, x, 1.0)

@@ -43,12 +43,35 @@ except ImportError:  # pragma: no cover
 N_MODES = 6
 
 
-def gauss_nodes(n_mu: int = 48):
-    """Internal polar nodes on [0, 90°] (Gauss–Legendre): θ (rad), μ, sin θ, ∫dμ weights."""
-    xg, wg = np.polynomial.legendre.leggauss(n_mu)
-    th = 0.25 * np.pi * (xg + 1)
-    mu, sn = np.cos(th), np.sin(th)
-    return th, mu, sn, sn * 0.25 * np.pi * wg
+def gauss_nodes(n_mu: int = 48, n: float | None = None):
+    """Internal polar nodes on [0, 90°], θ increasing: θ (rad), μ, sin θ, ∫dμ weights.
+
+    Without ``n``: Gauss–Legendre in θ over [0, 90°]. With the coat index ``n`` the
+    quadrature is split at the critical angle θc (Prahl 1995 puts the critical angle on
+    the quadrature's edge for the same reason): half the nodes in the escape cone, Gauss in
+    t with μ = μc + (1 − μc) t² (the coat transmission T ∝ √(μ − μc) at the cone's edge is
+    then smooth in t), half outside it, Gauss in θ. The escape-cone integrals converge
+    (internal diffuse reflectance r_i = 0.59635 for n = 1.5 from 24 nodes on; a single
+    Gauss rule over [0, 90°] gives 0.5914 at 48 nodes, 0.5981 at 160) — and with them the
+    light trapped under the coat, hence F_ms of absorbing paints (1–2 % too high before)."""
+    if n is None or n <= 1.0:
+        xg, wg = np.polynomial.legendre.leggauss(n_mu)
+        th = 0.25 * np.pi * (xg + 1)
+        mu, sn = np.cos(th), np.sin(th)
+        return th, mu, sn, sn * 0.25 * np.pi * wg
+    mu_c = np.sqrt(1.0 - 1.0 / (n * n))
+    th_c = np.arccos(mu_c)
+    n1 = n_mu // 2
+    x, w = np.polynomial.legendre.leggauss(n1)
+    t, wt = 0.5 * (x + 1), 0.5 * w
+    mu1 = (mu_c + (1.0 - mu_c) * t * t)[::-1]  # θ increasing
+    d1 = (2.0 * (1.0 - mu_c) * t * wt)[::-1]
+    x, w = np.polynomial.legendre.leggauss(n_mu - n1)
+    th2 = th_c + 0.5 * (0.5 * np.pi - th_c) * (x + 1)
+    d2 = np.sin(th2) * 0.5 * (0.5 * np.pi - th_c) * w
+    mu = np.concatenate([mu1, np.cos(th2)])
+    th = np.arccos(mu)
+    return th, mu, np.sin(th), np.concatenate([d1, d2])
 
 
 def flake_kernels(tab, mu, sn, dmu, n_modes: int = 0, n_phi: int = 32, lossless: bool = True):
@@ -90,7 +113,7 @@ def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int 
     """c_m(θi, θo) on the external albedo grid (2° steps): ``(NA, NA, n_modes)``; one shape for
     all wavelengths: Σ_λ M_m / Σ_λ M_0 (the flakes' spectral contrast hardly moves it)."""
     n = tab.n
-    th, mu, sn, dmu = gauss_nodes(n_mu)
+    th, mu, sn, dmu = gauss_nodes(n_mu, n)
     G = flake_kernels(tab, mu, sn, dmu, n_modes, lossless=False)[:, :, 0]  # (M+1, up/down, j, k, L)
     eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu  # (k,) extinction per unit τ, × τ_e/τ
     target = eps[:, None] * (tab.tau_e / tab.tau)[None, :]  # (k, L)

@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.appearance.brdf.interpolation import _deg, _lerp1, _lerp_table
+from nmmm.appearance.brdf.ms_azimuth import gauss_nodes
 
 
 def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, n_doublings: int = 16):
@@ -45,10 +46,7 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, 
     ``tests/appearance/test_brdf_montecarlo.py``.
     """
     n, L = tab.n, tab.L
-    xg, wg = np.polynomial.legendre.leggauss(n_mu)
-    th = 0.25 * np.pi * (xg + 1)  # internal polar angle nodes
-    mu, sn = np.cos(th), np.sin(th)
-    dmu = sn * 0.25 * np.pi * wg  # ∫ dμ weights
+    th, mu, sn, dmu = gauss_nodes(n_mu, n)  # internal polar nodes, split at the critical angle
     a_mu = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu  # flake extinction per unit τ
     ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi  # azimuth differences in [0, π), weights ×2
     uk = np.stack([sn, 0 * sn, -mu], -1)  # incoming travel directions (downward)
