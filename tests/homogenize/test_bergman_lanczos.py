@@ -20,7 +20,7 @@ def test_matches_cocg_at_every_wavelength():
     assert np.abs(a.diagonal - b.diagonal).max() <= 1e-6 * np.abs(b.diagonal).max()
     assert np.allclose(a.diagonal[-1], 2.25)
     # one run per loading costs the slowest wavelength, not the sum
-    assert max(a.metadata["projections"]) <= a.iterations.max() + 1
+    assert max(a.metadata["projections"]) <= a.iterations.max() + 3  # + the 3 axes' right-hand sides
     assert sum(a.metadata["projections"]) < b.iterations.sum()
 
 

@@ -213,6 +213,69 @@ PROBE = (150, 1e-2)
 COMPLEX64_METAL_TOL = 1e-4
 
 
+#: Early detection of a solve that will not reach ``tol`` within ``maxiter`` (default path):
+#: from PREDICT[0] projections on, every 25, the decay rate of the running-minimum residual over
+#: the last half of the history is extrapolated to ``tol``; the solve is stopped when the
+#: predicted count exceeds PREDICT[1] × maxiter. Krylov convergence near a resonance is
+#: superlinear — a slow phase while the Krylov space resolves the near-singular modes, then a
+#: fast one — so the linear extrapolation errs long: Boolean spheres 16³, ε = −50 + 2i, tol 1e-8
+#: converge in 531 projections where the extrapolation said 2308 at 150, 1402 at 200, 1018 at
+#: 300 (4.3× at most from 150 on); hence the margin 5. A plateau (complex64's floor, no decrease
+#: over the last half) is stopped at the first check.
+PREDICT = (150, 5.0)
+
+
+def predicted_projections(history, tol: float) -> float:
+    """Projections a solve with relative residual ``history`` (one entry per projection, the
+    first before any) would need to reach ``tol``, extrapolating the geometric decay rate of the
+    running minimum over the last half of the history; ``inf`` when it no longer decreases.
+
+    >>> h = [10.0 ** (-k / 100) for k in range(201)]   # one decade per 100 projections
+    >>> round(predicted_projections(h, 1e-5))
+    500
+    """
+    h = np.minimum.accumulate(np.asarray(history, dtype=float))
+    n = h.size - 1
+    if n < 2 or h[-1] <= tol:
+        return float(n)
+    half = max(1, n // 2)
+    drop = np.log(h[-1]) - np.log(h[-1 - half])
+    if not drop < 0:
+        return float("inf")
+    return n + (np.log(tol) - np.log(h[-1])) * half / drop
+
+
+def slow_solve_monitor(tol: float, maxiter: int, first: int | None = None, margin: float | None = None):
+    """A ``monitor(history) -> message | None`` for :func:`~nmmm.homogenize.solvers.solve_cocg`
+    that stops a solve predicted (:func:`predicted_projections`) to need more than ``margin`` ×
+    ``maxiter`` projections; the message states the prediction and the residual reached."""
+    first = PREDICT[0] if first is None else first
+    margin = PREDICT[1] if margin is None else margin
+
+    def monitor(history):
+        n = len(history) - 1
+        if n < first or n % 25:
+            return None
+        pred = predicted_projections(history, tol)
+        if pred > margin * maxiter:
+            when = "never (no decrease)" if not np.isfinite(pred) else f"after ~{pred:.0f} projections"
+            return (f"predicted slow: relative residual {min(history):.3g} after {n} projections would reach "
+                    f"tol={tol:g} {when}, beyond maxiter={maxiter}")
+        return None
+
+    return monitor
+
+
+#: Ways of solving a spectrum (``method=``): "auto" chooses between the other two.
+METHODS = ("auto", "per_wavelength", "lanczos")
+
+#: Registry of whole-spectrum methods: name -> ``f(compact_labels, counts, table, op, directions,
+#: tol, maxiter, workers, stop_when_slow) -> (tensor, iterations, histories, projections)``.
+#: "lanczos" is registered by :mod:`nmmm.homogenize.bergman_lanczos` (imported with the package),
+#: which uses this module's input checks, so this module does not import it.
+SPECTRUM_METHODS: dict = {}
+
+
 def metal_dielectric(table, low_loss: float | None = None) -> bool:
     """True when the phases mix Re ε < 0 (metal-like) with Re ε > 0 at some wavelength; with
     ``low_loss``, only when such a metal phase also has Im ε < low_loss · |ε|."""
@@ -269,6 +332,7 @@ def fft_permittivity(
     max_memory_gb: float | None = None,
     max_minutes: float | None = None,
     work_advice: str | None = None,
+    method: str = "auto",
     _decide_on=None,
 ) -> FFTHomogenization:
     """Effective permittivity tensor of a periodic voxel microstructure (FFT, quasi-static).
@@ -332,6 +396,15 @@ def fft_permittivity(
     work_advice : str, optional
         What the refusal beyond those limits tells the caller's user to change, in the caller's
         terms (a recipe's keys); default: this function's arguments and the CLI options.
+    method : {"auto", "per_wavelength", "lanczos"}
+        How a spectrum is solved (:data:`METHODS`). ``"per_wavelength"``: one ``solver`` solve per
+        wavelength and loading, warm-started. ``"lanczos"``: a two-phase cell at every wavelength
+        from one Lanczos run per loading (:func:`nmmm.homogenize.bergman_lanczos.lanczos_columns`,
+        Bergman's spectral representation; real float64 fields, no local fields). ``"auto"``
+        (default) takes "lanczos" for a two-phase cell over several wavelengths with the default
+        solver and no ``return_fields`` when its estimated time is lower
+        (:func:`nmmm.homogenize.work_estimate.choose_spectrum_method`), reported in
+        ``result.switches`` and ``metadata["method"]``.
 
     Returns
     -------
@@ -377,8 +450,21 @@ def fft_permittivity(
     key = str(solver).lower().replace("-", "_")
     if key not in SOLVERS:
         raise InvalidInputError(f"unknown solver {solver!r}; choose one of {sorted(SOLVERS)}")
+    mkey = str(method).lower().replace("-", "_")
+    if mkey not in METHODS:
+        raise InvalidInputError(f"unknown method {method!r}; choose one of {list(METHODS)}")
     compact, values, counts = _compact_labels(arr)
     table, scalar = _eps_table(values, eps, wavelength_nm)
+    if mkey == "lanczos":
+        if values.size != 2:
+            raise InvalidInputError(f"method='lanczos' needs a two-phase cell, got labels {values.tolist()}; "
+                                    "use method='per_wavelength'")
+        if return_fields:
+            raise InvalidInputError("method='lanczos' gives no local fields; use method='per_wavelength' with "
+                                    "return_fields=True")
+        if key != "cocg":
+            raise InvalidInputError(f"method='lanczos' is its own solver; solver={solver!r} needs "
+                                    "method='per_wavelength'")
     # the automatic choices look at the whole spectrum; a chunk of it (spectral_batches) passes the
     # whole table in ``_decide_on`` so that every chunk takes the same operator and precision
     decide = table if _decide_on is None else np.asarray(_decide_on)
@@ -397,11 +483,20 @@ def fft_permittivity(
     dirs = tuple(range(d)) if directions is None else tuple(int(j) for j in directions)
     if not dirs or any(j < 0 or j >= d for j in dirs):
         raise InvalidInputError(f"directions must be axes in 0..{d - 1}, got {directions!r}")
-    from nmmm.homogenize.work_estimate import check_fft_work
+    from nmmm.homogenize.work_estimate import check_fft_work, choose_spectrum_method
 
+    method_switch = None
+    if mkey == "auto":
+        mkey = "per_wavelength"
+        # on the whole spectrum (``decide``), so that every chunk of spectral_batches takes the same method
+        if values.size == 2 and decide.shape[0] > 1 and key == "cocg" and not return_fields:
+            mkey, why = choose_spectrum_method(arr.shape, decide.shape[0], len(dirs), dt,
+                                               metal=metal_dielectric(decide))
+            if mkey == "lanczos":
+                method_switch = {"what": "method", "from": "per_wavelength", "to": "lanczos", "reason": why}
     work = check_fft_work(arr.shape, n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt,
                           metal=metal_dielectric(table), max_memory_gb=max_memory_gb, max_minutes=max_minutes,
-                          advice=work_advice)
+                          advice=work_advice, method=mkey)
     spacing = None
     if voxel_nm is not None:
         spacing = np.broadcast_to(np.asarray(voxel_nm, dtype=float), (d,))
@@ -415,6 +510,26 @@ def fft_permittivity(
         if promoted is not None:
             switches.append(promoted)
     op = green_operator(arr.shape, green, spacing=spacing)
+    fractions = {int(v): float(cnt) / arr.size for v, cnt in zip(values, counts)}
+    if mkey == "lanczos":
+        lanczos_columns = SPECTRUM_METHODS["lanczos"]
+        if method_switch is not None:
+            switches.append(method_switch)
+        if promoted in switches:  # Lanczos runs on real float64 fields whatever dtype was asked
+            switches.remove(promoted)
+        tensor, iterations, histories, projections = lanczos_columns(compact, counts, table, op, dirs, tol, maxiter,
+                                                                     workers, stop_when_slow=fallback)
+        solvers_used = np.full(iterations.shape, "lanczos", dtype=object)
+        greens_used = np.full(iterations.shape, op.name, dtype=object)
+        if scalar:
+            tensor, iterations, solvers_used, greens_used = tensor[0], iterations[0], solvers_used[0], greens_used[0]
+            histories = histories[0]
+        return FFTHomogenization(
+            tensor=tensor, iterations=iterations, residual_history=histories, solver=solvers_used, green=op.name,
+            fractions=fractions, directions=dirs, shape=tuple(arr.shape), dtype="complex128",
+            metadata={"tol": tol, "voxel_nm": voxel_nm, "green_used": greens_used, "method": "lanczos",
+                      "projections": projections},
+            switches=tuple(switches))
     problem = Problem(compact, values.size, op, dt, workers)
     alternative = None  # (Problem with the other Willot operator), built on first need
     nw = table.shape[0]
@@ -453,6 +568,8 @@ def fft_permittivity(
                     extra = {}
                     if i == 0 and op.name == AUTO_GREEN and len(order) > 1 and order[1][1] is not problem:
                         extra["probe"] = PROBE  # auto mode: leave a slow operator early
+                    if fallback and name == "cocg":  # default path: stop a solve predicted beyond maxiter
+                        extra["monitor"] = slow_solve_monitor(tol, maxiter)
                     out = SOLVERS[name](prob, tab, e0, x0=x_start, tol=tol, maxiter=maxiter, keep_x=keep_x, **extra)
                     out.green = prob.op.name
                     attempts.append(out)
@@ -463,7 +580,9 @@ def fft_permittivity(
                         what = "green" if nxt is not prob else "solver"
                         switches.append({"what": what, "wavelength_index": w, "loading": j,
                                          "from": f"{name}/{prob.op.name}", "to": f"{nxt_name}/{nxt.op.name}",
-                                         "reason": out.message})
+                                         "reason": out.message, "projections": int(out.iterations),
+                                         "residual_reached": float(min(out.history)),
+                                         "predicted_projections": float(predicted_projections(out.history, tol))})
                     warnings.warn(f"{out.message}; trying the next solver", RuntimeWarning, stacklevel=2)
                 if not out.converged:
                     hist = {(a.solver if a.green == op.name else f"{a.solver}@{a.green}"): a.history for a in attempts}
@@ -488,7 +607,6 @@ def fft_permittivity(
             histories.append(hist_w)
     finally:
         bar.close()
-    fractions = {int(v): float(cnt) / arr.size for v, cnt in zip(values, counts)}
     if scalar:
         tensor, iterations, solvers_used, greens_used = tensor[0], iterations[0], solvers_used[0], greens_used[0]
         histories = histories[0]
@@ -504,10 +622,10 @@ def fft_permittivity(
         shape=tuple(arr.shape),
         dtype=dt.name,
         fields=fields,
-        metadata={"tol": tol, "voxel_nm": voxel_nm, "green_used": greens_used},
+        metadata={"tol": tol, "voxel_nm": voxel_nm, "green_used": greens_used, "method": "per_wavelength"},
         switches=tuple(switches),
     )
 
 
 __all__ = ["fft_permittivity", "FFTHomogenization", "auto_green", "metal_dielectric", "LOW_LOSS", "PROBE",
-           "COMPLEX64_METAL_TOL"]
+           "COMPLEX64_METAL_TOL", "METHODS", "SPECTRUM_METHODS", "PREDICT", "predicted_projections", "slow_solve_monitor"]

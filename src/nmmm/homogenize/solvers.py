@@ -232,12 +232,14 @@ STALL_WINDOW = 300
 
 @_local_threads
 def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_x=True,
-               stall_window: int | None = STALL_WINDOW, probe: tuple | None = None) -> SolveOutcome:
+               stall_window: int | None = STALL_WINDOW, probe: tuple | None = None, monitor=None) -> SolveOutcome:
     """Conjugate orthogonal conjugate gradient on Γ ε x = −Γ ε E0 (van der Vorst & Melissen 1990).
 
     Stops early ("stalled") when the best relative residual has not halved over the last
     ``stall_window`` projections (None: never), and, with ``probe = (n, r)``, when the best
-    residual is still above r after n projections (a convergence too slow to wait for)."""
+    residual is still above r after n projections (a convergence too slow to wait for). ``monitor``:
+    a callable on the residual history after each projection; a returned message stops the solve
+    (unconverged, with that message) — fft_permittivity's prediction of a solve beyond maxiter."""
     tab, start, r, nb, x, done = _krylov_start(problem, tab, e0, keep_x, "cocg")
     if done is not None:  # homogeneous medium: E = E0
         return done
@@ -294,6 +296,10 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
         if res <= tol:
             converged = True
             break
+        if monitor is not None:
+            message = monitor(history) or ""
+            if message:
+                break
         if probe is not None and it == probe[0] and min(history) > probe[1]:
             message = (f"COCG slow: best relative residual {min(history):.3g} > {probe[1]:g} after "
                        f"{probe[0]} projections (tol={tol:g})")

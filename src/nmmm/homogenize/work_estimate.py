@@ -31,7 +31,8 @@ import numpy as np
 
 from nmmm.errors import InvalidInputError
 
-__all__ = ["estimate_fft_work", "check_fft_work", "FFT_MAX_MEMORY_GB", "FFT_MAX_MINUTES"]
+__all__ = ["estimate_fft_work", "check_fft_work", "choose_spectrum_method", "FFT_MAX_MEMORY_GB", "FFT_MAX_MINUTES",
+           "SPECTRUM_METHODS"]
 
 #: Fields (d complex components per voxel each) alive during a COCG solve.
 FIELDS_IN_MEMORY = 8
@@ -42,6 +43,20 @@ PROJECTIONS_DIELECTRIC = 50
 PROJECTIONS_METAL = 400
 #: Default time limit of one call (estimated minutes).
 FFT_MAX_MINUTES = 30.0
+
+#: Spectra: projections of a warm-started wavelength / those of a cold one (aluminium flakes,
+#: 128³: 124 warm vs 180-216 cold; 64³ measured in benchmarks/bench_fft_metals.py --method-cost).
+WARM_START_FRACTION = 0.6
+#: The Lanczos run of a loading lasts as long as its slowest wavelength's solve: its projections
+#: / a typical wavelength's cold ones (128³ aluminium: 216 / 180-200).
+LANCZOS_SLOWEST = 1.2
+#: Seconds of one Lanczos step / one complex128 COCG projection on the same grid (real fields
+#: in a complex buffer, plus the d − 1 off-diagonal dot products). Measured 64³ Al flakes, 9 λ:
+#: 20.4 ms per Lanczos step vs 17.4 ms per complex64 COCG projection (≈ 0.7 of a complex128
+#: one, on a loaded machine); 1.0 is kept, which leans towards per-wavelength solves.
+LANCZOS_COST = 1.0
+#: Methods :func:`choose_spectrum_method` chooses between.
+SPECTRUM_METHODS = ("per_wavelength", "lanczos")
 
 
 def _physical_memory_gb() -> float:
@@ -56,8 +71,9 @@ FFT_MAX_MEMORY_GB = round(0.5 * _physical_memory_gb(), 1)
 
 
 def estimate_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None = None, dtype="complex128",
-                      metal: bool = False) -> dict:
-    """Estimated size of an FFT homogenization of a cell of ``shape``.
+                      metal: bool = False, method: str = "per_wavelength") -> dict:
+    """Estimated size of an FFT homogenization of a cell of ``shape``; ``method`` "lanczos": one
+    run per loading for all wavelengths (:func:`choose_spectrum_method`).
 
     Returns
     -------
@@ -76,9 +92,41 @@ def estimate_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None =
     loadings = d if n_loadings is None else int(n_loadings)
     memory_gb = FIELDS_IN_MEMORY * d * voxels * item / 1e9
     projections = PROJECTIONS_METAL if metal else PROJECTIONS_DIELECTRIC
+    if method not in SPECTRUM_METHODS:
+        raise InvalidInputError(f"unknown method {method!r}; choose one of {list(SPECTRUM_METHODS)}")
     speed = SECONDS_PER_COMPONENT_VOXEL * (0.6 if item == 8 else 1.0)
-    seconds = n_wavelengths * loadings * projections * d * voxels * speed
+    if method == "lanczos":
+        seconds = loadings * projections * LANCZOS_SLOWEST * LANCZOS_COST * d * voxels * SECONDS_PER_COMPONENT_VOXEL
+    else:
+        seconds = n_wavelengths * loadings * projections * d * voxels * speed
     return {"voxels": voxels, "memory_gb": memory_gb, "projections": projections, "seconds": seconds}
+
+
+def choose_spectrum_method(shape, n_wavelengths: int, n_loadings: int, dtype="complex128",
+                           metal: bool = False) -> tuple[str, str]:
+    """"lanczos" or "per_wavelength" for a two-phase cell over ``n_wavelengths``, and why.
+
+    Per wavelength, warm-started: P (1 + :data:`WARM_START_FRACTION` (n − 1)) projections per
+    loading at the ``dtype``'s cost; one Lanczos run: :data:`LANCZOS_SLOWEST` P steps at
+    :data:`LANCZOS_COST` complex128 projections each. P — the projections of one cold solve —
+    cancels, so the choice depends on the number of wavelengths and the precision only
+    (complex128: Lanczos from 2 wavelengths on; complex64: from 3).
+
+    >>> choose_spectrum_method((64, 64, 64), 81, 3, "complex64")[0]
+    'lanczos'
+    >>> choose_spectrum_method((64, 64, 64), 2, 3, "complex64")[0]
+    'per_wavelength'
+    """
+    n = int(n_wavelengths)
+    item = np.dtype(dtype).itemsize
+    per = (1.0 + WARM_START_FRACTION * (n - 1)) * (0.6 if item == 8 else 1.0)
+    lz = LANCZOS_SLOWEST * LANCZOS_COST
+    if n > 1 and lz < per:
+        return "lanczos", (f"two-phase cell over {n} wavelengths: one Lanczos run per loading is estimated at "
+                           f"{lz / per:.2g} of the time of per-wavelength {np.dtype(dtype).name} COCG with warm "
+                           f"starts ({lz:.2g} vs {per:.3g} cold-solve times)")
+    return "per_wavelength", (f"{n} wavelength(s): per-wavelength solves estimated at {per:.3g} cold-solve times, "
+                              f"one Lanczos run at {lz:.2g}")
 
 
 def _duration(seconds: float) -> str:
@@ -93,7 +141,7 @@ def _duration(seconds: float) -> str:
 
 def check_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None = None, dtype="complex128",
                    metal: bool = False, max_memory_gb: float | None = None, max_minutes: float | None = None,
-                   advice: str | None = None) -> dict:
+                   advice: str | None = None, method: str = "per_wavelength") -> dict:
     """The estimate of :func:`estimate_fft_work`, or :class:`InvalidInputError` with it when the
     memory exceeds ``max_memory_gb`` (default :data:`FFT_MAX_MEMORY_GB`) or the time
     ``max_minutes`` (default :data:`FFT_MAX_MINUTES`); ``float('inf')`` lifts a limit.
@@ -103,7 +151,8 @@ def check_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None = No
     min_lim = FFT_MAX_MINUTES if max_minutes is None else float(max_minutes)
     if not (mem_lim > 0 and min_lim > 0):
         raise InvalidInputError(f"max_memory_gb and max_minutes must be > 0, got {mem_lim:g} and {min_lim:g}")
-    e = estimate_fft_work(shape, n_wavelengths=n_wavelengths, n_loadings=n_loadings, dtype=dtype, metal=metal)
+    e = estimate_fft_work(shape, n_wavelengths=n_wavelengths, n_loadings=n_loadings, dtype=dtype, metal=metal,
+                          method=method)
     over = []
     if e["memory_gb"] > mem_lim:
         over.append(f"memory {e['memory_gb']:.3g} GB > {mem_lim:g} GB"
