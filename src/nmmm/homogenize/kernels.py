@@ -25,6 +25,7 @@ Fields are stored as ``(d, N)`` arrays (d components, N voxels, C order); labels
 
 from __future__ import annotations
 
+import types
 from contextlib import contextmanager
 
 import numba
@@ -171,16 +172,29 @@ def _eps_times(q, x, labels, tab, e0):
     return q
 
 
+def _parallel_and_serial(fn, fastmath=True):
+    """(parallel, serial) Numba builds of ``fn``, both cached on disk.
+
+    Numba's cache names an entry by the function's module, qualified name, first line and
+    signature, not by its options: ``njit(parallel=True, cache=True)(f)`` and
+    ``njit(cache=True)(f)`` share one entry, and whichever variant compiled first serves both.
+    A fresh cache filled by a small (serial) call first left every large field on one thread
+    (issue 22: the 2-thread COCG iteration ran all its element-wise passes serially). The
+    serial build is therefore a copy of ``fn`` under its own qualified name.
+    """
+    ser = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__ + "_serial", fn.__defaults__, fn.__closure__)
+    ser.__qualname__ = fn.__qualname__ + "_serial"
+    ser.__doc__ = fn.__doc__
+    return (njit(parallel=True, cache=True, fastmath=fastmath)(fn), njit(cache=True, fastmath=fastmath)(ser))
+
+
 def _parallel(a) -> bool:
     return a.size >= SERIAL_BELOW and numba.get_num_threads() > 1
 
 
-_dir_par = njit(parallel=True, cache=True, fastmath=True)(_direction_and_eps)
-_dir_ser = njit(cache=True, fastmath=True)(_direction_and_eps)
-_upd_par = njit(parallel=True, cache=True, fastmath=True)(_cocg_update)
-_upd_ser = njit(cache=True, fastmath=True)(_cocg_update)
-_eps_par = njit(parallel=True, cache=True)(_eps_times)
-_eps_ser = njit(cache=True)(_eps_times)
+_dir_par, _dir_ser = _parallel_and_serial(_direction_and_eps)
+_upd_par, _upd_ser = _parallel_and_serial(_cocg_update)
+_eps_par, _eps_ser = _parallel_and_serial(_eps_times, fastmath=False)
 
 
 def direction_and_eps(p, q, r, beta, labels, tab, update, sums=None):
@@ -202,8 +216,7 @@ def eps_times(q, x, labels, tab, e0):
     return f(q, x, labels, tab, e0)
 
 
-_proj_par = njit(parallel=True, cache=True, fastmath=True)(_project)
-_proj_ser = njit(cache=True, fastmath=True)(_project)
+_proj_par, _proj_ser = _parallel_and_serial(_project)
 
 
 def project(F, a, b, ny, has_ny, mode):
@@ -320,12 +333,9 @@ def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x):
     return part[:, 0].sum() + 1j * part[:, 1].sum(), part[:, 2].sum()
 
 
-_pot_par = njit(parallel=True, cache=True, fastmath=True)(_potential)
-_pot_ser = njit(cache=True, fastmath=True)(_potential)
-_sg_par = njit(parallel=True, cache=True, fastmath=True)(_stencil_gradient)
-_sg_ser = njit(cache=True, fastmath=True)(_stencil_gradient)
-_us_par = njit(parallel=True, cache=True, fastmath=True)(_cocg_update_stencil)
-_us_ser = njit(cache=True, fastmath=True)(_cocg_update_stencil)
+_pot_par, _pot_ser = _parallel_and_serial(_potential)
+_sg_par, _sg_ser = _parallel_and_serial(_stencil_gradient)
+_us_par, _us_ser = _parallel_and_serial(_cocg_update_stencil)
 
 
 def potential(F, psi, a, b, ph):
