@@ -68,26 +68,33 @@ def test_default_path_reports_a_predicted_stop():
             fft_permittivity(lab, {0: 2.25, 1: -50 + 20j}, green="willot2015", dtype="complex64", tol=1e-12,
                              maxiter=2000, directions=[0], workers=1)
     assert len(exc.value.history["cocg"]) < 500  # stopped early, not after 2000
+    # BiCGStab and GMRES measured worse on predicted-slow (near-singular) cells: not tried
+    assert set(exc.value.history) == {"cocg"}
 
 
 def test_a_predicted_stop_is_reported_with_its_numbers(monkeypatch):
     """The switch after a stop records the projections run, the residual reached and the
-    prediction (a monitor that stops every COCG after 30 steps stands in for a slow case; 31 projections
-    with the right-hand side's)."""
+    prediction, and goes to COCG with the other Willot operator (a monitor that stops the first
+    COCG after 30 steps stands in for a slow case; 31 projections with the right-hand side's)."""
     import nmmm.homogenize.fft as F
 
-    def stop_at_30(tol, maxiter):
-        return lambda h: "predicted slow (test)" if len(h) > 30 else None
+    calls = []
 
-    monkeypatch.setattr(F, "slow_solve_monitor", stop_at_30)
+    def stop_first_at_30(tol, maxiter):
+        calls.append(1)
+        first = len(calls) == 1
+        return lambda h: "predicted slow (test)" if first and len(h) > 30 else None
+
+    monkeypatch.setattr(F, "slow_solve_monitor", stop_first_at_30)
     lab, _ = _boolean()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = fft_permittivity(lab, {0: 2.25, 1: -50 + 20j}, green="willot2015", tol=1e-6, directions=[0], workers=1)
-    sw = r.switches[0]
-    assert sw["from"] == "cocg/willot2015" and sw["to"] == "bicgstab/willot2015" and sw["reason"] == "predicted slow (test)"
+        r = fft_permittivity(lab, {0: 2.25, 1: -50 + 20j}, tol=1e-6, directions=[0], workers=1)
+    assert r.green == "willot2015"
+    sw = [s for s in r.switches if "residual_reached" in s][0]
+    assert sw["from"] == "cocg/willot2015" and sw["to"] == "cocg/willot2014" and sw["reason"] == "predicted slow (test)"
     assert sw["projections"] == 31 and 1e-6 < sw["residual_reached"] < 1 and sw["predicted_projections"] > 30
-    assert r.solver[0] == "bicgstab"
+    assert r.solver[0] == "cocg" and r.metadata["green_used"][0] == "willot2014"
 
 
 def _anisotropic_cell():
