@@ -8,7 +8,13 @@ two on the full grid. nmmm runs at ``NUMBA_NUM_THREADS`` threads, miepython's ar
 (it has no parallel path): set ``NUMBA_NUM_THREADS=1`` for equal threads, or see
 benchmarks/run_all.py, which runs both thread counts.
 
-Run:  python benchmarks/bench_mie.py
+Per-call cost (issue 22, ``--single``): one sphere (m = 1.5 + 0.01i in air, D = 500 nm, λ = 550 nm,
+x ≈ 2.9) by 1000 separate calls of each library, timed in alternation, medians of ``--repeat``
+runs; the nmmm call includes its input checks and the MieResult it returns, miepython's its
+tuple of four floats. Both run on one thread (neither threads a single sphere).
+
+Run:  python benchmarks/bench_mie.py            # the grid
+      python benchmarks/bench_mie.py --single   # the per-call cost
 """
 
 from __future__ import annotations
@@ -69,7 +75,43 @@ def main(repeat: int = 3) -> dict:
     return out
 
 
+def per_call(repeat: int = 51, calls: int = 1000) -> dict:
+    """µs per call of ``mie`` and of ``miepython.efficiencies`` for one sphere (see the module notes)."""
+    import miepython
+
+    from nmmm.layers.mie_scattering import mie
+
+    args = (1.5 + 0.01j, 1.0, 500.0, 550.0)
+
+    def ours():
+        for _ in range(calls):
+            r = mie(*args)
+        return r
+
+    def rival():
+        for _ in range(calls):
+            q = miepython.efficiencies(args[0], args[2], args[3], n_env=args[1])
+        return q
+
+    rel = abs(float(ours().qext) - rival()[0]) / rival()[0]  # also the warm-up (compilation)
+    ts_ours, ts_rival = [], []
+    for _ in range(repeat):
+        for f, ts in ((ours, ts_ours), (rival, ts_rival)):
+            t0 = time.perf_counter()
+            f()
+            ts.append(time.perf_counter() - t0)
+    t_ours, t_rival = (float(np.median(t)) / calls * 1e6 for t in (ts_ours, ts_rival))
+    print(f"Mie, one sphere (x = {float(ours().size_parameter):.2f}), {calls} separate calls, medians of {repeat}, "
+          f"load {os.getloadavg()[0]:.1f}")
+    print(f"  nmmm mie()              : {t_ours:6.2f} µs per call")
+    print(f"  miepython.efficiencies  : {t_rival:6.2f} µs per call")
+    print(f"  ratio miepython / nmmm  : {t_rival / t_ours:.2f}   (Q_ext rel. difference {rel:.0e})")
+    return {"us_per_call_nmmm": t_ours, "us_per_call_miepython": t_rival, "ratio": t_rival / t_ours}
+
+
 if __name__ == "__main__":
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeat", type=int, default=5)
-    main(p.parse_args().repeat)
+    p.add_argument("--single", action="store_true", help="the per-call cost of one sphere instead of the grid")
+    a = p.parse_args()
+    per_call(max(a.repeat, 21)) if a.single else main(a.repeat)
