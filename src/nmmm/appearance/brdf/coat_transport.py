@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.appearance.brdf.interpolation import _NA, _deg, _lerp1, _lerp_table
-from nmmm.appearance.brdf.ms_azimuth import N_MODES, flake_kernels, gauss_nodes
+from nmmm.appearance.brdf.ms_azimuth import N_MODES, flake_kernels, gauss_nodes, lobe_tables
 
 _N_MU = 48
 _MAX_STEP = 0.03  # largest extinction per doubling seed slab
@@ -91,13 +91,17 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
         col0 = G[0, :, 1].sum(axis=(0, 1))
         G *= np.where(col0 > 0, target / np.where(col0 > 0, col0, 1.0), 0.0)[None, None, None, None]
         fe = getattr(tab, "edge", 0.0)
-        if fe > 0:  # rims: a fraction fe of the flake interactions scattered isotropically
+        if fe > 0:  # rims: a fraction fe of the flake interactions scattered diffusely
             G *= 1.0 - fe
         G_mirror = G[:, 0].copy() if fe > 0 else G[:, 0]  # (M+1, variant, j, k, L) upward, mirrors only: term 2's light
         if fe > 0:
-            iso = pigment_kernels(np.zeros(L), mu, sn, dmu, 0)[0] * mu[None, None, :, None]  # columns sum to 1
+            # a rim takes light in proportion to the flakes' projected area a(μ_k) and sends it, up or
+            # down, in proportion to a(μ_j): reciprocal (isotropic emission would not be: it gives
+            # f ∝ a(μi)/μi/μo for a thin layer, not symmetric); no azimuth memory (mode 0 only)
+            em = eps * mu * dmu  # a(μ_j) dμ_j
+            em = em / (2.0 * em.sum())  # columns sum to 1 over up and down
             for v, alb in enumerate((tab.edge_albedo, np.ones(L))):
-                G[0, :, v] += iso * (fe * target * alb[None, :])[None, None]
+                G[0, :, v] += em[None, :, None, None] * (fe * target * alb[None, :])[None, None]
         fext = np.moveaxis(target, -1, 0) * tab.tau  # (L, k) through the whole band
     else:
         fext = np.zeros((L, n_mu))
@@ -149,37 +153,26 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     kap = tab.kappa[sel][:, None]
     s2 = inv_mu.T + inv_mu  # (j, k) 1/μ_j + 1/μ_k
     with_coat = lambda Rt: np.linalg.solve(eye[None] - Rt * Ds, Rt)  # noqa: E731
-    ms = []
-    for m in range(n_modes + 1):
-        Mm = with_coat(system(m, 0, sel))
-        if flakes:  # one flake mirror, no pigment scattering, straight to the coat's underside (term 2's
-            # light; a rim's light, scattered once, stays in the lobe as it stays in F_ms)
-            Ku = np.moveaxis(G_mirror[m, 0][..., sel], -1, 0)
+    def multiply_scattered(m, v):
+        """M_m: the coat's internal reflection (underside included), mode m, variant v, less
+        what terms 2–3 hold (one flake mirror and no pigment scattering; the substrate seen
+        without any scattering). A rim's light, scattered once, stays in M as it does in F_ms."""
+        kapv = (tab.kappa if v == 0 else tab.kappa0)[sel][:, None]
+        Mm = with_coat(system(m, v, sel))
+        if flakes:
+            Ku = np.moveaxis(G_mirror[m, v][..., sel], -1, 0)
             fs = fext[sel][:, :, None] + fext[sel][:, None, :]
-            x = fs + kap[:, :, None] * dz * s2[None]
-            Mm = Mm - Ku * tab.tau * np.exp(-kap[:, :, None] * z0 * s2[None]) * -np.expm1(-x) / np.where(x > 0, x, 1.0)
-        if m == 0:  # substrate seen through the coat without any scattering
-            tdir = np.exp(-fext[sel] - kap * inv_mu)
-            Rb = tab.rho[sel][:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
+            x = fs + kapv[:, :, None] * dz * s2[None]
+            Mm = Mm - Ku * tab.tau * np.exp(-kapv[:, :, None] * z0 * s2[None]) * -np.expm1(-x) / np.where(x > 0, x, 1.0)
+        if m == 0:
+            tdir = np.exp(-fext[sel] - kapv * inv_mu)
+            rhov = (tab.rho if v == 0 else np.ones(L))[sel]
+            Rb = rhov[:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
             Mm = Mm - with_coat(tdir[:, :, None] * Rb * tdir[:, None, :])
-        ms.append(Mm)
-    # per wavelength node (coloured pigments: strongly absorbed light keeps more memory of
-    # the incidence azimuth), interpolated in wavelength by the kernel
-    M0 = ms[0]
-    ok = M0 > 1e-12 * np.max(np.abs(M0), axis=(1, 2), keepdims=True)
-    c = np.stack([np.where(ok, Mm / np.where(ok, M0, 1.0), 0.0) for Mm in ms[1:]])  # (M, K, j, k)
-    c = 0.5 * (c + np.swapaxes(c, -1, -2))
-    tha = np.radians(np.linspace(0.0, 90.0, _NA))
-    thp = np.arcsin(np.clip(np.sin(tha) / n, 0, 1))
-    W = np.zeros((_NA, n_mu))
-    x = np.clip(np.interp(thp, th, np.arange(n_mu)), 0, n_mu - 1.000001)
-    i0 = x.astype(int)
-    W[np.arange(_NA), i0] = 1 - (x - i0)
-    W[np.arange(_NA), i0 + 1] += x - i0
-    if np.any(F > 0):
-        tab._ms_modes_spectral = np.ascontiguousarray(np.einsum("aj,mwjk,bk->abwm", W, c, W, optimize=True))  # (NA, NA, K, M)
-    else:
-        tab._ms_modes_spectral = np.zeros((1, 1, 1, 0))
-    tab._ms_nodes = sel.astype(np.int64)
-    tab._ms_modes = np.zeros((1, 1, 0))  # (the wavelength-independent table of ms_azimuth: unused)
+        return Mm
+
+    ms = [multiply_scattered(m, 0) for m in range(n_modes + 1)]
+    ms_lossless = multiply_scattered(0, 1)
+    lobe_tables(tab, F, sel, ms, ms_lossless, th, mu, dmu)
     return F
+

@@ -28,7 +28,7 @@ from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
 from nmmm.appearance.brdf.coat_transport import coat_transport
 from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
 from nmmm.appearance.brdf.interpolation import _NA, _deg, _hemi_mean, _lerp1, _lerp_table
-from nmmm.appearance.brdf.ms_azimuth import azimuth_factor
+from nmmm.appearance.brdf.ms_azimuth import _node_weights, lobe_factor
 from nmmm.appearance.brdf.tables import _Tables
 from nmmm.appearance.flakes import refract_in
 
@@ -124,7 +124,8 @@ class _EffectTables(_Tables):
         E0_bar = 2 * (w_e * mu_e) @ _lerp_table(self.E10, th_e, self.astep)
         sub = 2 * (w_e * mu_e) @ _lerp_table(self.E1 - Esi, th_e, self.astep)
         sub0 = 2 * (w_e * mu_e) @ _lerp_table(self.E10 - Esi, th_e, self.astep)
-        self.Fms = coat_transport(self, sub, sub0)
+        self.E0_bar = E0_bar
+        self.Fms = coat_transport(self, sub, sub0)  # also the lobe's shape tables (c_0 and the modes)
         # attenuation by the pigments, exp(−c S'), tabulated over S' = 1/μi' + 1/μo' (2 … 2/μc',
         # internal directions lie in the escape cone): 2048 nodes, relative error ≤ (c Δ)²/8 ≈ 1e-5 c²
         mu_min = np.sqrt(max(1 - 1 / (n * n), 1e-6))
@@ -147,13 +148,7 @@ class _EffectTables(_Tables):
             kb = np.where(self.rho > 0, self.rho / (np.pi * (1 - self.rho * self.r_t)), 0.0)
         C = self._ms_modes_spectral
         do_ms = "multiple" in comps and bool(np.any(self.Kms > 0)) and C.shape[-1] > 0
-        nodes = self._ms_nodes
-        li = np.arange(self.L)
-        if nodes.size > 1:
-            lk = np.clip(np.searchsorted(nodes, li, side="right") - 1, 0, nodes.size - 2)
-            lw = np.clip((li - nodes[lk]) / (nodes[lk + 1] - nodes[lk]), 0.0, 1.0)
-        else:
-            lk, lw = np.zeros(self.L, np.int64), np.zeros(self.L)
+        lk, lw = _node_weights(self)
         kap = np.asarray(self.kappa, float)
         Kms = np.asarray(self.Kms, float) if "multiple" in comps else np.zeros(self.L)
         if "base" not in comps:
@@ -210,20 +205,8 @@ class _EffectTables(_Tables):
         return f
 
     def _azimuth_factor(self, wi, wo):
-        """s(λ) = 2 Σ c_m cos(m φ) (≥ −1) at the wavelength nodes, linear in between: (P, L)."""
-        C, nodes = self._ms_modes_spectral, self._ms_nodes
-        if C.shape[-1] == 0:
-            return np.zeros((wi.shape[0], self.L))
-        s = np.stack([azimuth_factor(_NodeView(self, C[:, :, k]), wi, wo) for k in range(nodes.size)], axis=1)
-        li = np.arange(self.L)
-        return np.stack([np.interp(li, nodes, s[p]) for p in range(s.shape[0])])
-
-
-class _NodeView:
-    """The attributes :func:`ms_azimuth.azimuth_factor` reads, for one wavelength node."""
-
-    def __init__(self, tab, C):
-        self._ms_modes, self.astep, self.has_flakes, self.Kms = C, tab.astep, True, tab.Kms
+        """s(λ) = c_0 + 2 Σ c_m cos(m φ) (≥ −1): (P, L)."""
+        return lobe_factor(self, wi, wo)
 
 
 def _pos(c, step, n_nodes):
@@ -239,7 +222,7 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
     NT = Fs.shape[0]
     NA = Dms.shape[0]
     ND = den.shape[0]
-    M = C.shape[3] if do_ms else 0
+    M = C.shape[3] - 1 if do_ms else 0  # C[..., 0] is c_0, C[..., m] the mode m
     K = C.shape[2]
     NS2 = Qd.shape[0]
     inv_n2 = 1.0 / (n * n)
@@ -298,17 +281,24 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
             ro = np.sqrt(ox * ox + oy * oy)
             if ri > 1e-9 and ro > 1e-9:
                 cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-        # azimuthal modes at the wavelength nodes (1 + s multiplies the lobe), linear in λ between
+        # polar shape c_0 and azimuthal modes at the wavelength nodes (1 + s multiplies the
+        # separable lobe), linear in λ between
         sn = np.zeros(K + 1)
-        if cphi <= 1.0:
+        if do_ms:
+            w00 = (1.0 - fai) * (1.0 - fao)
+            w01 = (1.0 - fai) * fao
+            w10 = fai * (1.0 - fao)
+            w11 = fai * fao
             for k in range(K):
-                s = 0.0
-                c_prev, c_cur = 1.0, cphi
-                for m in range(M):
-                    s += c_cur * (C[ai0, ao0, k, m] * (1.0 - fai) * (1.0 - fao) + C[ai0, ao0 + 1, k, m] * (1.0 - fai) * fao
-                                  + C[ai0 + 1, ao0, k, m] * fai * (1.0 - fao) + C[ai0 + 1, ao0 + 1, k, m] * fai * fao)
-                    c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
-                sn[k] = max(2.0 * s, -1.0)
+                s = (C[ai0, ao0, k, 0] * w00 + C[ai0, ao0 + 1, k, 0] * w01 + C[ai0 + 1, ao0, k, 0] * w10
+                     + C[ai0 + 1, ao0 + 1, k, 0] * w11)
+                if cphi <= 1.0:
+                    c_prev, c_cur = 1.0, cphi
+                    for m in range(1, M + 1):
+                        s += 2.0 * c_cur * (C[ai0, ao0, k, m] * w00 + C[ai0, ao0 + 1, k, m] * w01
+                                            + C[ai0 + 1, ao0, k, m] * w10 + C[ai0 + 1, ao0 + 1, k, m] * w11)
+                        c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
+                sn[k] = max(s, -1.0)
             sn[K] = sn[K - 1]
         has_z0 = z0 > 0.0
         has_below = dz < 1.0

@@ -158,7 +158,8 @@ class PaintBRDF:
         wi = check_directions(wi, "wi")
         shape = wi.shape[:-1]
         th = _deg(wi.reshape(-1, 3)[:, 2])
-        a = _lerp_table(tab.E1, th, tab.astep) + _lerp_table(tab.Dms, th, tab.astep) * tab.Fms
+        a = _lerp_table(tab.E1, th, tab.astep) + (_lerp_table(tab.Dms * tab.ms_albedo_factor, th, tab.astep)
+                                                  * tab.Fms)
         return a.reshape(shape + (tab.L,))
 
     def lossless_albedo(self, wavelength_nm, wi) -> np.ndarray:

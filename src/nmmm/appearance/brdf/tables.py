@@ -12,6 +12,7 @@ from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
 from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
 from nmmm.appearance.brdf.fused_kernel import _kernel
 from nmmm.appearance.brdf.interpolation import _NA, _NT, _deg, _hemi_mean, _lerp1, _lerp_table, _phi_mean
+from nmmm.appearance.brdf.ms_azimuth import azimuth_modes
 from nmmm.appearance.brdf.multiple_scattering import multiple_scattering_factor
 from nmmm.appearance.brdf.spectral_inputs import _spectral_values
 from nmmm.appearance.flakes import fresnel_unpolarized, refract_in
@@ -158,6 +159,12 @@ class _Tables:
         with np.errstate(divide="ignore", invalid="ignore"):
             self.Kms = np.where(1 - E0_bar > 1e-9, self.Fms / (np.pi * (1 - E0_bar)), 0.0)
         self.E0_bar = E0_bar
+        # the lobe's polar shape c_0 and azimuthal modes from the flake layer's transport, and its
+        # directional albedo relative to (1 − E⁰) F_ms (ms_azimuth.lobe_tables)
+        self.ms_albedo_factor = np.ones_like(self.Dms)
+        self._ms_modes_spectral, self._ms_nodes = np.zeros((1, 1, 1, 0)), np.zeros(1, np.int64)
+        if self.has_flakes and np.any(self.Kms > 0):
+            azimuth_modes(self)
 
     def _es_at(self, tha):
         return _lerp_table(self.Es, tha, self.step)
