@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from nmmm.colour.tristimulus import _fused_xyz_or_lab, _split_spectral, spectra_to_xyz, weighting_factors, white_point
+from nmmm.colour.tristimulus import (_fused_applies, _fused_xyz_or_lab, _split_spectral, spectra_to_xyz,
+                                     weighting_factors, white_point)
 
 
 def xyz_to_lab(xyz: ArrayLike, white_xyz: ArrayLike) -> np.ndarray:
@@ -38,9 +39,10 @@ def spectra_to_lab(wavelength_nm: ArrayLike, values: ArrayLike | None = None, il
     array([ 100.,    0.,    0.])
     """
     wavelength_nm, values = _split_spectral(wavelength_nm, values)
-    # a large stack: checks, sums and CIELAB in one parallel read (the values as xyz_to_lab's)
-    lab = _fused_xyz_or_lab(values, weighting_factors(wavelength_nm, illuminant, observer), lab=True)
-    if lab is not None:
-        return lab
+    if _fused_applies(values, np.size(wavelength_nm)):
+        # a large stack: checks, sums and CIELAB in one parallel read (the values as xyz_to_lab's)
+        lab = _fused_xyz_or_lab(values, weighting_factors(wavelength_nm, illuminant, observer), lab=True)
+        if lab is not None:
+            return lab
     xyz = spectra_to_xyz(wavelength_nm, values, illuminant, observer)
     return xyz_to_lab(xyz, white_point(wavelength_nm, illuminant, observer))

@@ -260,17 +260,17 @@ def _checked_lab(v, Wt, tolerance, y_white, xyz_n, out):  # pragma: no cover - c
     return bad
 
 
-def _fused_applies(values, W) -> bool:
-    """Large C-contiguous float64 stacks on W's grid go through the fused kernels."""
+def _fused_applies(values, n_wavelengths: int) -> bool:
+    """Large C-contiguous float64 stacks on a grid of ``n_wavelengths`` go through the fused kernels."""
     return (isinstance(values, np.ndarray) and values.dtype == np.float64 and values.ndim >= 2
-            and values.size >= _FUSED_MIN_SIZE and values.shape[-1] == W.shape[0] and values.flags.c_contiguous)
+            and values.size >= _FUSED_MIN_SIZE and values.shape[-1] == n_wavelengths and values.flags.c_contiguous)
 
 
 def _fused_xyz_or_lab(values, W, lab: bool = False):
     """XYZ (or CIELAB, white W.sum(0)) of ``values`` through the fused check-and-sum kernels, or
     None when they do not apply or found a NaN, an infinity or a negative value (the NumPy checks
     of :func:`spectra_to_xyz` then name it)."""
-    if not _fused_applies(values, W):
+    if not _fused_applies(values, W.shape[0]):
         return None
     flat = values.reshape(-1, W.shape[0])
     out = np.empty((flat.shape[0], 3))

@@ -444,7 +444,8 @@ def _mie_single(n_particle, n_medium, diameter_nm, wavelength_nm, max_size_param
 
 _PLAIN_REAL = frozenset((int, float, np.float64, np.float32, np.int64, np.int32))
 _PLAIN_COMPLEX = _PLAIN_REAL | {complex, np.complex128, np.complex64}
-#: np.float64 scalars are made as value * _ONE (value a Python float): the same value, half the cost of np.float64(value)
+#: np.float64 scalars are made as value * _ONE (value a Python float): the same value, at half the cost
+#: of np.float64(value)
 _ONE = np.float64(1.0)
 _new_object = object.__new__
 _set_attribute = object.__setattr__
