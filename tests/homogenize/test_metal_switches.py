@@ -137,7 +137,7 @@ def test_method_lanczos_laminate_is_exact(green):
 
 def test_auto_chooses_lanczos_for_a_two_phase_spectrum_and_reports_it():
     lab = G.boolean_spheres(16, 0.2, 2.5, ndim=3, seed=4)
-    em = np.linspace(-50, -10, 8) + 5j
+    em = np.linspace(-50, -10, 8) + 13j
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         auto = fft_permittivity(lab, {0: 2.25, 1: em}, tol=1e-8, workers=1)
@@ -148,9 +148,11 @@ def test_auto_chooses_lanczos_for_a_two_phase_spectrum_and_reports_it():
     assert auto.green == per.green  # the same operator: the same discrete problem
     assert np.abs(auto.tensor - per.tensor).max() <= 1e-5 * np.abs(per.tensor).max()
     assert sum(auto.metadata["projections"]) < per.iterations.sum()
-    # one wavelength, three phases or local fields: per wavelength
+    # one wavelength, or a low-loss metal at some wavelength (Lanczos drifts there): per wavelength
     one = fft_permittivity(lab, {0: 2.25, 1: -50 + 5j}, tol=1e-6, workers=1, directions=[0])
     assert one.metadata["method"] == "per_wavelength" and not [s for s in one.switches if s["what"] == "method"]
+    low = fft_permittivity(lab, {0: 2.25, 1: np.array([-44 + 13j, -50 + 2j])}, tol=1e-6, workers=1, directions=[0])
+    assert low.metadata["method"] == "per_wavelength"
 
 
 def test_method_choice_follows_the_estimate():

@@ -402,7 +402,9 @@ def fft_permittivity(
         from one Lanczos run per loading (:func:`nmmm.homogenize.bergman_lanczos.lanczos_columns`,
         Bergman's spectral representation; real float64 fields, no local fields). ``"auto"``
         (default) takes "lanczos" for a two-phase cell over several wavelengths with the default
-        solver and no ``return_fields`` when its estimated time is lower
+        solver, no ``return_fields`` and no low-loss metal (Im ε < :data:`LOW_LOSS` |ε|, where
+        finite-precision Lanczos falls behind COCG and drifts from it: see the source) when its
+        estimated time is lower
         (:func:`nmmm.homogenize.work_estimate.choose_spectrum_method`), reported in
         ``result.switches`` and ``metadata["method"]``.
 
@@ -488,8 +490,14 @@ def fft_permittivity(
     method_switch = None
     if mkey == "auto":
         mkey = "per_wavelength"
-        # on the whole spectrum (``decide``), so that every chunk of spectral_batches takes the same method
-        if values.size == 2 and decide.shape[0] > 1 and key == "cocg" and not return_fields:
+        # on the whole spectrum (``decide``), so that every chunk of spectral_batches takes the same method;
+        # not with a low-loss metal: there finite-precision Lanczos (no reorthogonalisation) falls behind
+        # COCG and its estimated residual is no longer the true one (64³, willot2014, tol 1e-5: flakes
+        # −50 + 1i 1284 steps vs COCG 498 and ε_xx 2.3e-3 apart, COCG's true residual 9.7e-6; Boolean
+        # spheres −50 + 1i 540 vs 304, 6.4e-5 apart; flakes −50 + 5i 419 vs 291, 5.8e-6 apart), while at
+        # −44 + 13i both take 181 and agree to 4e-11
+        if (values.size == 2 and decide.shape[0] > 1 and key == "cocg" and not return_fields
+                and not metal_dielectric(decide, LOW_LOSS)):
             mkey, why = choose_spectrum_method(arr.shape, decide.shape[0], len(dirs), dt,
                                                metal=metal_dielectric(decide))
             if mkey == "lanczos":
