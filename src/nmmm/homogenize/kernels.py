@@ -21,16 +21,35 @@ its FFTs:
 
 Fields are stored as ``(d, N)`` arrays (d components, N voxels, C order); labels as a flat
 ``(N,)`` integer array indexing a per-phase permittivity table.
+
+Threads. Each kernel is one serial, GIL-free Numba build over a range of its outer loop (voxel
+chunks or first-axis planes); :func:`_split` cuts that loop into one contiguous range per thread
+and runs them on a small pool of Python threads (the caller runs the first). The thread count is
+Numba's count of the calling thread (:func:`threads` sets it for a block and restores it), and
+fields below :data:`SERIAL_BELOW` values run on the caller alone. Not Numba's ``parallel=True``:
+its OpenMP workers spin for milliseconds after each kernel, on the cores that the next FFT's
+threads (scipy.fft ``workers``) need — at 2 threads on 2 cores the FFTs of an iteration lost
+up to half their speed to it (issue 22). Reductions are summed per chunk / per plane and then in
+a fixed order, so a result does not depend on the thread count.
 """
 
 from __future__ import annotations
 
-import types
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+#: Voxels below which a field is processed by the calling thread alone (a hand-off to the pool
+#: costs ~20-50 µs, more on a loaded machine).
+SERIAL_BELOW = 1 << 17
+CHUNK = 1 << 15  # voxels per reduction chunk of the flat (d, N) kernels (contiguous runs per component)
+
+_kernel = njit(cache=True, fastmath=True, nogil=True)
 
 
 @njit(inline="always")
@@ -50,12 +69,13 @@ def _k_components(a, b, ny, has_ny, i1, i2, i3):
     return k1, k2, k3
 
 
-def _project(F, a, b, ny, has_ny, mode):
-    """Apply Γ (mode 0) or I − 2Γ (mode 1) in place to F of shape (d, N1, N2, N3), d = 2 or 3."""
+@_kernel
+def _project(F, a, b, ny, has_ny, mode, lo, hi):
+    """Apply Γ (mode 0) or I − 2Γ (mode 1) in place to the planes lo..hi−1 of F (d, N1, N2, N3)."""
     d = F.shape[0]
-    n1, n2, n3 = F.shape[1], F.shape[2], F.shape[3]
+    n2, n3 = F.shape[2], F.shape[3]
     two = 2.0
-    for i1 in prange(n1):
+    for i1 in range(lo, hi):
         for i2 in range(n2):
             ab = a[0, i1] * b[1, i2]  # hoisted per-axis products
             ba = b[0, i1] * a[1, i2]
@@ -92,26 +112,21 @@ def _project(F, a, b, ny, has_ny, mode):
                     F[1, i1, i2, i3] = 0
                     if d == 3:
                         F[2, i1, i2, i3] = 0
-    return F
 
 
-CHUNK = 1 << 15  # voxels per parallel work item (contiguous runs per component)
-SERIAL_BELOW = 1 << 17  # smaller fields run serially: a parallel launch costs more than it saves
-
-
-def _direction_and_eps(p, q, r, beta, labels, tab, update, sums):
+@_kernel
+def _direction_and_eps(p, q, r, beta, labels, tab, update, part, lo, hi):
+    """Chunks lo..hi−1: p ← r + β p (if ``update``), q ← ε p; part[c] ← (Σ ε p·p, Σ_i (ε p)_j)."""
     d, n = p.shape
-    nchunk = (n + CHUNK - 1) // CHUNK
-    part = np.zeros((nchunk, 2 + 2 * d))
-    for c in prange(nchunk):
-        lo = c * CHUNK
-        hi = min(n, lo + CHUNK)
+    for c in range(lo, hi):
+        i0 = c * CHUNK
+        i1 = min(n, i0 + CHUNK)
         acc_re = 0.0
         acc_im = 0.0
         for j in range(d):
             s_re = 0.0
             s_im = 0.0
-            for i in range(lo, hi):
+            for i in range(i0, i1):
                 e = tab[labels[i]]
                 if update:
                     v = r[j, i] + beta * p[j, i]
@@ -129,23 +144,20 @@ def _direction_and_eps(p, q, r, beta, labels, tab, update, sums):
             part[c, 3 + 2 * j] = s_im
         part[c, 0] = acc_re
         part[c, 1] = acc_im
-    for j in range(d):
-        sums[j] = part[:, 2 + 2 * j].sum() + 1j * part[:, 3 + 2 * j].sum()
-    return part[:, 0].sum() + 1j * part[:, 1].sum()
 
 
-def _cocg_update(x, r, p, q, alpha):
+@_kernel
+def _cocg_update(x, r, p, q, alpha, part, lo, hi):
+    """Chunks lo..hi−1: x ← x + α p, r ← r − α q; part[c] ← (rᵀr, ‖r‖²) of the chunk."""
     d, n = x.shape
-    nchunk = (n + CHUNK - 1) // CHUNK
-    part = np.zeros((nchunk, 3))
-    for c in prange(nchunk):
-        lo = c * CHUNK
-        hi = min(n, lo + CHUNK)
+    for c in range(lo, hi):
+        i0 = c * CHUNK
+        i1 = min(n, i0 + CHUNK)
         rr_re = 0.0
         rr_im = 0.0
         nr = 0.0
         for j in range(d):
-            for i in range(lo, hi):
+            for i in range(i0, i1):
                 x[j, i] = x[j, i] + alpha * p[j, i]
                 v = r[j, i] - alpha * q[j, i]
                 r[j, i] = v
@@ -157,66 +169,99 @@ def _cocg_update(x, r, p, q, alpha):
         part[c, 0] = rr_re
         part[c, 1] = rr_im
         part[c, 2] = nr
-    return part[:, 0].sum() + 1j * part[:, 1].sum(), part[:, 2].sum()
 
 
-def _eps_times(q, x, labels, tab, e0):
+@njit(cache=True, nogil=True)
+def _eps_times(q, x, labels, tab, e0, lo, hi):
+    """Chunks lo..hi−1: q ← ε (e0 + x)."""
     d, n = x.shape
-    nchunk = (n + CHUNK - 1) // CHUNK
-    for c in prange(nchunk):
-        lo = c * CHUNK
-        hi = min(n, lo + CHUNK)
+    for c in range(lo, hi):
+        i0 = c * CHUNK
+        i1 = min(n, i0 + CHUNK)
         for j in range(d):
-            for i in range(lo, hi):
+            for i in range(i0, i1):
                 q[j, i] = tab[labels[i]] * (e0[j] + x[j, i])
-    return q
-
-
-def _parallel_and_serial(fn, fastmath=True):
-    """(parallel, serial) Numba builds of ``fn``, both cached on disk.
-
-    Numba's cache names an entry by the function's module, qualified name, first line and
-    signature, not by its options: ``njit(parallel=True, cache=True)(f)`` and
-    ``njit(cache=True)(f)`` share one entry, and whichever variant compiled first serves both.
-    A fresh cache filled by a small (serial) call first left every large field on one thread
-    (issue 22: the 2-thread COCG iteration ran all its element-wise passes serially). The
-    serial build is therefore a copy of ``fn`` under its own qualified name.
-    """
-    ser = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__ + "_serial", fn.__defaults__, fn.__closure__)
-    ser.__qualname__ = fn.__qualname__ + "_serial"
-    ser.__doc__ = fn.__doc__
-    return (njit(parallel=True, cache=True, fastmath=fastmath)(fn), njit(cache=True, fastmath=fastmath)(ser))
 
 
 def _parallel(a) -> bool:
     return a.size >= SERIAL_BELOW and numba.get_num_threads() > 1
 
 
-_dir_par, _dir_ser = _parallel_and_serial(_direction_and_eps)
-_upd_par, _upd_ser = _parallel_and_serial(_cocg_update)
-_eps_par, _eps_ser = _parallel_and_serial(_eps_times, fastmath=False)
+_pool: ThreadPoolExecutor | None = None
+_pool_lock = threading.Lock()
+
+
+def _executor(workers: int) -> ThreadPoolExecutor:
+    """The module's pool of kernel threads, with at least ``workers`` threads (grown on demand)."""
+    global _pool
+    with _pool_lock:
+        if _pool is None or _pool._max_workers < workers:
+            old, _pool = _pool, ThreadPoolExecutor(max_workers=workers, thread_name_prefix="nmmm-kernel")
+            if old is not None:
+                old.shutdown(wait=False)
+        return _pool
+
+
+def _forget_pool():  # a forked child has none of its parent's threads
+    global _pool, _pool_lock
+    _pool, _pool_lock = None, threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
+
+
+def _split(kernel, n_outer: int, field, *args) -> None:
+    """Run ``kernel(*args, lo, hi)`` over 0..n_outer−1: one contiguous range per thread (Numba's
+    thread count of the caller) when ``field`` is large enough, else on the caller alone."""
+    k = min(numba.get_num_threads(), n_outer) if _parallel(field) else 1
+    if k <= 1:
+        kernel(*args, 0, n_outer)
+        return
+    edges = [(n_outer * i) // k for i in range(k + 1)]
+    futs = [_executor(k - 1).submit(kernel, *args, edges[i], edges[i + 1]) for i in range(1, k)]
+    try:
+        kernel(*args, edges[0], edges[1])
+    finally:
+        for f in futs:
+            f.result()
+
+
+def _column_sums(part) -> list:
+    """Sum of each column of the per-chunk partial sums (pairwise, in chunk order: the same for
+    any thread count)."""
+    return [float(part[:, j].sum()) for j in range(part.shape[1])]
+
+
+def _nchunk(n: int) -> int:
+    return (n + CHUNK - 1) // CHUNK
 
 
 def direction_and_eps(p, q, r, beta, labels, tab, update, sums=None):
     """If ``update``: p ← r + β p. Then q ← ε p. Returns Σ ε p·p (bilinear, no conjugate), and
     writes Σ_voxels (ε p)_j into ``sums`` (complex128, length d) when given."""
-    f = _dir_par if _parallel(p) else _dir_ser
-    return f(p, q, r, beta, labels, tab, update, np.zeros(p.shape[0], np.complex128) if sums is None else sums)
+    d, n = p.shape
+    part = np.zeros((_nchunk(n), 2 + 2 * d))
+    _split(_direction_and_eps, part.shape[0], p, p, q, r, beta, labels, tab, update, part)
+    tot = _column_sums(part)
+    if sums is not None:
+        for j in range(d):
+            sums[j] = complex(tot[2 + 2 * j], tot[3 + 2 * j])
+    return complex(tot[0], tot[1])
 
 
 def cocg_update(x, r, p, q, alpha):
     """x ← x + α p; r ← r − α q. Returns (rᵀr, ‖r‖²)."""
-    f = _upd_par if _parallel(x) else _upd_ser
-    return f(x, r, p, q, alpha)
+    part = np.zeros((_nchunk(x.shape[1]), 3))
+    _split(_cocg_update, part.shape[0], x, x, r, p, q, alpha, part)
+    tot = _column_sums(part)
+    return complex(tot[0], tot[1]), float(tot[2])
 
 
 def eps_times(q, x, labels, tab, e0):
     """q ← ε (e0 + x) (e0 a constant vector)."""
-    f = _eps_par if _parallel(x) else _eps_ser
-    return f(q, x, labels, tab, e0)
-
-
-_proj_par, _proj_ser = _parallel_and_serial(_project)
+    _split(_eps_times, _nchunk(x.shape[1]), x, q, x, labels, tab, e0)
+    return q
 
 
 def project(F, a, b, ny, has_ny, mode):
@@ -225,14 +270,15 @@ def project(F, a, b, ny, has_ny, mode):
     Γ(q) = k k^H / |k|² is evaluated on the fly from the per-axis factors ``a``, ``b``
     (k_j = a_j Π_{l≠j} b_l), with the Nyquist rule of the spectral symbol when ``has_ny``.
     """
-    f = _proj_par if _parallel(F) else _proj_ser
-    return f(F, a, b, ny, has_ny, mode)
+    _split(_project, F.shape[1], F, F, a, b, ny, has_ny, mode)
+    return F
 
 
-def _potential(F, psi, a, b, ph):
-    """psi ← phase(q) · kᴴ F̂ / |k|² (0 at k = 0), F̂ of shape (3, N1, N2, N3); no Nyquist rule."""
-    n1, n2, n3 = F.shape[1], F.shape[2], F.shape[3]
-    for i1 in prange(n1):
+@_kernel
+def _potential(F, psi, a, b, ph, lo, hi):
+    """Planes lo..hi−1: psi ← phase(q) · kᴴ F̂ / |k|² (0 at k = 0), F̂ (3, N1, N2, N3); no Nyquist rule."""
+    n2, n3 = F.shape[2], F.shape[3]
+    for i1 in range(lo, hi):
         for i2 in range(n2):
             ab = a[0, i1] * b[1, i2]
             ba = b[0, i1] * a[1, i2]
@@ -249,7 +295,6 @@ def _potential(F, psi, a, b, ph):
                     psi[i1, i2, i3] = (p12 * ph[2, i3]) * (s * (1.0 / n2k))
                 else:
                     psi[i1, i2, i3] = 0
-    return psi
 
 
 @njit(inline="always")
@@ -282,12 +327,13 @@ def _row_grad(psi, kind, i1, i2, j1, j2, g):
             g[2, i3] = (A[j3] + B[j3] + C[j3] + D[j3]) - (A[i3] + B[i3] + C[i3] + D[i3])
 
 
-def _stencil_gradient(psi, F, kind, ih):
-    """F_j ← D_j ψ / h_j, F of shape (3, N1, N2, N3)."""
+@_kernel
+def _stencil_gradient(psi, F, kind, ih, lo, hi):
+    """Planes lo..hi−1: F_j ← D_j ψ / h_j, F of shape (3, N1, N2, N3)."""
     n1, n2, n3 = psi.shape
-    for i1 in prange(n1):
+    g = np.empty((3, n3), dtype=psi.dtype)
+    for i1 in range(lo, hi):
         j1 = i1 + 1 if i1 + 1 < n1 else 0
-        g = np.empty((3, n3), dtype=psi.dtype)
         for i2 in range(n2):
             j2 = i2 + 1 if i2 + 1 < n2 else 0
             _row_grad(psi, kind, i1, i2, j1, j2, g)
@@ -295,17 +341,16 @@ def _stencil_gradient(psi, F, kind, ih):
                 h = ih[c]
                 for i3 in range(n3):
                     F[c, i1, i2, i3] = g[c, i3] * h
-    return F
 
 
-def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x):
-    """x ← x + α p (if ``update_x``); r ← r − α D ψ / h (q = Γ ε p from its potential); returns
-    (rᵀr, ‖r‖²)."""
+@_kernel
+def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x, part, lo, hi):
+    """Planes lo..hi−1: x ← x + α p (if ``update_x``); r ← r − α D ψ / h (q = Γ ε p from its
+    potential); part[i1] ← (rᵀr, ‖r‖²) of the plane."""
     n1, n2, n3 = psi.shape
-    part = np.zeros((n1, 3))
-    for i1 in prange(n1):
+    g = np.empty((3, n3), dtype=psi.dtype)
+    for i1 in range(lo, hi):
         j1 = i1 + 1 if i1 + 1 < n1 else 0
-        g = np.empty((3, n3), dtype=psi.dtype)
         rr_re = 0.0
         rr_im = 0.0
         nr = 0.0
@@ -330,30 +375,26 @@ def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x):
         part[i1, 0] = rr_re
         part[i1, 1] = rr_im
         part[i1, 2] = nr
-    return part[:, 0].sum() + 1j * part[:, 1].sum(), part[:, 2].sum()
-
-
-_pot_par, _pot_ser = _parallel_and_serial(_potential)
-_sg_par, _sg_ser = _parallel_and_serial(_stencil_gradient)
-_us_par, _us_ser = _parallel_and_serial(_cocg_update_stencil)
 
 
 def potential(F, psi, a, b, ph):
     """psi ← phase · kᴴ F̂ / |k|² on the Fourier transform F̂ (3, N1, N2, N3) of a vector field."""
-    f = _pot_par if _parallel(F) else _pot_ser
-    return f(F, psi, a, b, ph)
+    _split(_potential, F.shape[1], F, F, psi, a, b, ph)
+    return psi
 
 
 def stencil_gradient(psi, F, kind, ih):
     """F_j ← D_j ψ / h_j (kind 1: forward difference; 2: voxel-cube difference)."""
-    f = _sg_par if _parallel(F) else _sg_ser
-    return f(psi, F, kind, ih)
+    _split(_stencil_gradient, psi.shape[0], F, psi, F, kind, ih)
+    return F
 
 
 def cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x=True):
     """x ← x + α p (if ``update_x``; else x is not touched); r ← r − α D ψ / h. Returns (rᵀr, ‖r‖²)."""
-    f = _us_par if _parallel(r) else _us_ser
-    return f(x, r, p, psi, alpha, kind, ih, bool(update_x))
+    part = np.zeros((psi.shape[0], 3))
+    _split(_cocg_update_stencil, psi.shape[0], r, x, r, p, psi, alpha, kind, ih, bool(update_x), part)
+    tot = _column_sums(part)
+    return complex(tot[0], tot[1]), float(tot[2])
 
 
 @njit(cache=True)
