@@ -181,17 +181,22 @@ def lanczos_columns(compact, counts, table, op, dirs, tol, maxiter, workers=2, s
             beta_prev = 0.0
             k = 0
             hist = [[1.0] for _ in range(nw)]
+            mv = np.empty_like(v)
+            tmp = np.empty_like(v)
+            flat = lambda f: f.reshape(-1)  # noqa: E731 - BLAS dot products on contiguous views, no temporaries
             while k < maxiter and not np.all(done_at > 0):
                 for i in others:
-                    cross[i].append(float(np.sum(rhs[i] * v)))
+                    cross[i].append(float(np.dot(flat(rhs[i]), flat(v))))
                 w = prob.q  # the work buffer: no field allocated per step
                 np.multiply(chi, v, out=w.real)
                 w.imag[...] = 0.0
-                mv = prob.project_inplace(w).real.copy()
-                a = float(np.sum(v * mv))
-                mv -= a * v
-                mv -= beta_prev * v_prev
-                beta = float(np.sqrt(np.sum(mv * mv)))
+                np.copyto(mv, prob.project_inplace(w).real)
+                a = float(np.dot(flat(v), flat(mv)))
+                np.multiply(v, a, out=tmp)
+                mv -= tmp
+                np.multiply(v_prev, beta_prev, out=tmp)
+                mv -= tmp
+                beta = float(np.sqrt(np.dot(flat(mv), flat(mv))))
                 k += 1
                 alphas.append(a)
                 betas.append(beta)
@@ -216,7 +221,8 @@ def lanczos_columns(compact, counts, table, op, dirs, tol, maxiter, workers=2, s
                             f"after {k} steps (worst relative residual {res[worst]:.3g} at index {worst}) would "
                             f"reach it {when}, beyond maxiter={maxiter}; raise maxiter or loosen tol",
                             history={"lanczos": hist[worst]})
-                v_prev, v = v, mv / beta
+                np.divide(mv, beta, out=v_prev)  # the next v, in the old v_prev's memory
+                v_prev, v = v, v_prev
                 beta_prev = beta
             projections.append(k + 1 + (d - 1 if c == 0 else 0))  # the other axes' b_i: with the first
             if np.any(done_at == 0):

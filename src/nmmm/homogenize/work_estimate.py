@@ -50,11 +50,11 @@ WARM_START_FRACTION = 0.6
 #: The Lanczos run of a loading lasts as long as its slowest wavelength's solve: its projections
 #: / a typical wavelength's cold ones (128³ aluminium: 216 / 180-200).
 LANCZOS_SLOWEST = 1.2
-#: Seconds of one Lanczos step / one complex128 COCG projection on the same grid (real fields
-#: in a complex buffer, plus the d − 1 off-diagonal dot products). Measured 64³ Al flakes, 9 λ:
-#: 20.4 ms per Lanczos step vs 17.4 ms per complex64 COCG projection (≈ 0.7 of a complex128
-#: one, on a loaded machine); 1.0 is kept, which leans towards per-wavelength solves.
-LANCZOS_COST = 1.0
+#: Seconds of one Lanczos step / one complex128 COCG projection on the same grid. Measured 64³
+#: flakes, 80 steps, twice, on the loaded 2-core machine: 60-80 ms vs 21 ms (2.9-3.9); a
+#: profile gives the FFTs ~20 ms and the step's NumPy vector work (single-threaded, strided real
+#: views of the complex buffer) ~29 ms — a fused Numba step would bring it near 1.
+LANCZOS_COST = 3.0
 #: Methods :func:`choose_spectrum_method` chooses between.
 SPECTRUM_METHODS = ("per_wavelength", "lanczos")
 
@@ -110,11 +110,11 @@ def choose_spectrum_method(shape, n_wavelengths: int, n_loadings: int, dtype="co
     loading at the ``dtype``'s cost; one Lanczos run: :data:`LANCZOS_SLOWEST` P steps at
     :data:`LANCZOS_COST` complex128 projections each. P — the projections of one cold solve —
     cancels, so the choice depends on the number of wavelengths and the precision only
-    (complex128: Lanczos from 2 wavelengths on; complex64: from 3).
+    (complex128: Lanczos from 6 wavelengths on; complex64: from 10).
 
     >>> choose_spectrum_method((64, 64, 64), 81, 3, "complex64")[0]
     'lanczos'
-    >>> choose_spectrum_method((64, 64, 64), 2, 3, "complex64")[0]
+    >>> choose_spectrum_method((64, 64, 64), 9, 3, "complex64")[0]
     'per_wavelength'
     """
     n = int(n_wavelengths)
