@@ -207,13 +207,15 @@ def test_cli_method_and_spectrum(tmp_path, capsys):
     assert np.allclose(zz, harm, rtol=1e-7)
 
 
-@pytest.mark.parametrize("args,word", [(["--method", "bergman"], "--method"),
-                                       (["--wavelengths", "600:400:10"], "--wavelengths")])
+@pytest.mark.parametrize("args,word", [(["--eps", "1=-50+2j", "--method", "bergman"], "--method"),
+                                       (["--eps", "1=-50+2j", "--wavelengths", "600:400:10"], "--wavelengths"),
+                                       (["--eps", "1=main/Al/Rakic"], "--wavelengths"),
+                                       (["--eps", "1=nope/none", "--wavelengths", "500"], "nope/none")])
 def test_cli_refuses_bad_values_in_one_line(tmp_path, capsys, args, word):
     from nmmm.cli import main
 
     path = _cell_file(tmp_path)
-    rc = main(["homogenize", "run", str(path), "--eps", "0=2.25", "--eps", "1=-50+2j"] + args)
+    rc = main(["homogenize", "run", str(path), "--eps", "0=2.25"] + args)
     err = capsys.readouterr().err
     assert rc == 2 and err.startswith("error:") and word in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1

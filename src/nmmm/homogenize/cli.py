@@ -95,6 +95,10 @@ def run(cell, eps_items, wavelengths, green, solver, method, tol, maxiter, singl
     ms = load_microstructure(cell)
     eps = _parse_eps(eps_items)
     wl = _parse_wavelengths(wavelengths)
+    named = [k for k, v in eps.items() if not isinstance(v, complex)]
+    if named and wl is None:
+        raise click.BadParameter(f"--eps {named[0]}={eps[named[0]].name if hasattr(eps[named[0]], 'name') else '...'} "
+                                 "is a material: give the wavelengths to evaluate it at, e.g. --wavelengths 380:780:10")
     # an InvalidInputError (a refused work estimate among them) reaches nmmm.cli.main: one
     # 'error:' line, exit 2 like every data error
     r = fft_permittivity(ms, eps, green=None if green == "auto" else green, solver=solver, tol=tol,
