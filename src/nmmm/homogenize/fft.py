@@ -586,11 +586,14 @@ def fft_permittivity(
                     attempts.append(out)
                     if out.converged:
                         break
-                    if out.message.startswith("predicted slow"):
-                        # a near-singular (near-resonant) system, not a breakdown: BiCGStab and GMRES
-                        # measured worse there (64³ flakes, −50 + 1i, willot2014: best residual 0.11 and
-                        # 0.027 after 600 projections where COCG converged in 495); only COCG with the
-                        # other operator is still tried
+                    if fallback and name == "cocg" and (
+                            out.message.startswith("predicted slow")
+                            or (out.message.startswith("COCG reached maxiter") and out.iterations > PREDICT[0]
+                                and np.isfinite(predicted_projections(out.history, tol)))):
+                        # converging too slowly (a near-singular, near-resonant system), not a breakdown:
+                        # BiCGStab and GMRES measured worse there (64³ flakes, −50 + 1i, willot2014: best
+                        # residual 0.11 and 0.027 after 600 projections where COCG converged in 495);
+                        # only COCG with the other operator is still tried
                         order[i + 1:] = [(nm, pb) for nm, pb in order[i + 1:] if nm == "cocg"]
                     if i + 1 < len(order):
                         nxt_name, nxt = order[i + 1]
