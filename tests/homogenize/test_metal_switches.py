@@ -152,7 +152,8 @@ def test_auto_chooses_lanczos_for_a_two_phase_spectrum_and_reports_it():
     one = fft_permittivity(lab, {0: 2.25, 1: -50 + 5j}, tol=1e-6, workers=1, directions=[0])
     assert one.metadata["method"] == "per_wavelength" and not [s for s in one.switches if s["what"] == "method"]
     low = fft_permittivity(lab, {0: 2.25, 1: np.array([-44 + 13j, -50 + 2j])}, tol=1e-6, workers=1, directions=[0])
-    assert low.metadata["method"] == "per_wavelength"
+    assert low.metadata["method"] == "per_wavelength" and "low-loss" in low.metadata["method_reason"]
+    assert auto.metadata["method_reason"].startswith("auto: two-phase cell over 8 wavelengths")
 
 
 def test_method_choice_follows_the_estimate():

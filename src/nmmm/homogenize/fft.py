@@ -406,7 +406,7 @@ def fft_permittivity(
         finite-precision Lanczos falls behind COCG and drifts from it: see the source) when its
         estimated time is lower
         (:func:`nmmm.homogenize.work_estimate.choose_spectrum_method`), reported in
-        ``result.switches`` and ``metadata["method"]``.
+        ``result.switches`` and ``metadata["method"]`` (why: ``metadata["method_reason"]``).
 
     Returns
     -------
@@ -488,8 +488,11 @@ def fft_permittivity(
     from nmmm.homogenize.work_estimate import check_fft_work, choose_spectrum_method
 
     method_switch = None
+    method_reason = f"method={method!r} asked"
     if mkey == "auto":
         mkey = "per_wavelength"
+        method_reason = ("auto: one wavelength, another solver, local fields, more than two phases or a low-loss "
+                         "metal (Lanczos drifts there)")
         # on the whole spectrum (``decide``), so that every chunk of spectral_batches takes the same method;
         # not with a low-loss metal: there finite-precision Lanczos (no reorthogonalisation) falls behind
         # COCG and its estimated residual is no longer the true one (64³, willot2014, tol 1e-5: flakes
@@ -500,6 +503,7 @@ def fft_permittivity(
                 and not metal_dielectric(decide, LOW_LOSS)):
             mkey, why = choose_spectrum_method(arr.shape, decide.shape[0], len(dirs), dt,
                                                metal=metal_dielectric(decide))
+            method_reason = "auto: " + why
             if mkey == "lanczos":
                 method_switch = {"what": "method", "from": "per_wavelength", "to": "lanczos", "reason": why}
     work = check_fft_work(arr.shape, n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt,
@@ -536,7 +540,7 @@ def fft_permittivity(
             tensor=tensor, iterations=iterations, residual_history=histories, solver=solvers_used, green=op.name,
             fractions=fractions, directions=dirs, shape=tuple(arr.shape), dtype="complex128",
             metadata={"tol": tol, "voxel_nm": voxel_nm, "green_used": greens_used, "method": "lanczos",
-                      "projections": projections},
+                      "method_reason": method_reason, "projections": projections},
             switches=tuple(switches))
     problem = Problem(compact, values.size, op, dt, workers)
     alternative = None  # (Problem with the other Willot operator), built on first need
@@ -648,7 +652,8 @@ def fft_permittivity(
         shape=tuple(arr.shape),
         dtype=dt.name,
         fields=fields,
-        metadata={"tol": tol, "voxel_nm": voxel_nm, "green_used": greens_used, "method": "per_wavelength"},
+        metadata={"tol": tol, "voxel_nm": voxel_nm, "green_used": greens_used, "method": "per_wavelength",
+                  "method_reason": method_reason},
         switches=tuple(switches),
     )
 
