@@ -178,7 +178,8 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
     -------
     FFTHomogenization
         As from one call, with ``metadata["chunks"]``: per piece solved (first wavelength, last + 1,
-        loadings, seconds), and ``metadata["tasks"]``: seconds of each task. The workers' warnings
+        seconds), ``metadata["chunk_loadings"]``: the loadings (axes) of each piece, and
+        ``metadata["tasks"]``: seconds of each task. The workers' warnings
         are warned here (each once); a worker's error is raised here with a note naming its
         wavelengths and loadings (its "wavelength index" counts within the piece). A failed task
         fails the call: nothing is kept for a restart.
@@ -259,7 +260,8 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
     meta["green_used"] = green_used
     if projections:
         meta["projections"] = [projections[c] for c in sorted(projections)]
-    meta["chunks"] = [(lo, hi, js, sec) for lo, hi, js, _, sec, _ in parts]
+    meta["chunks"] = [(lo, hi, sec) for lo, hi, _, _, sec, _ in parts]
+    meta["chunk_loadings"] = [js for _, _, js, _, _, _ in parts]
     meta["tasks"] = task_seconds
     return FFTHomogenization(
         tensor=tensor, iterations=iterations, residual_history=hist, solver=solver,
