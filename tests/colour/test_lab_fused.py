@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
-from nmmm.colour import spectra_to_lab, spectra_to_xyz, white_point, xyz_to_lab
+from nmmm.colour import spectra_to_lab, spectra_to_xyz, weighting_factors, white_point, xyz_to_lab
 from nmmm.colour.tristimulus import _FUSED_MIN_SIZE
 from nmmm.errors import InvalidInputError
 
@@ -73,3 +73,14 @@ def test_truncated_grid_still_warns_on_a_large_stack():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         spectra_to_lab(W_NM, _stack())
+
+
+@pytest.mark.parametrize("rows", [ROWS, ROWS + 1])  # the kernels take rows two at a time: even and odd counts
+def test_odd_and_even_row_counts(rows):
+    R = _stack(rows)
+    np.testing.assert_allclose(spectra_to_xyz(W_NM, R), R @ weighting_factors(W_NM), rtol=1e-13, atol=1e-12)
+    np.testing.assert_allclose(spectra_to_lab(W_NM, R), _two_step(R), rtol=0, atol=1e-11)
+    R[rows - 1, 0] = np.nan  # the last row, alone in its pass when the count is odd
+    for f in (spectra_to_xyz, spectra_to_lab):
+        with pytest.raises(InvalidInputError, match="NaN or infinite"):
+            f(W_NM, R)
