@@ -28,7 +28,7 @@ from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
 from nmmm.appearance.brdf.coat_transport import coat_transport
 from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
 from nmmm.appearance.brdf.interpolation import _NA, _deg, _hemi_mean, _lerp1, _lerp_table
-from nmmm.appearance.brdf.ms_azimuth import _node_weights, lobe_factor
+from nmmm.appearance.brdf.ms_azimuth import _lobe_sum_nb, _node_weights, lobe_factor
 from nmmm.appearance.brdf.tables import _Tables
 from nmmm.appearance.flakes import refract_in
 
@@ -281,32 +281,26 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
             ro = np.sqrt(ox * ox + oy * oy)
             if ri > 1e-9 and ro > 1e-9:
                 cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-        # polar shape c_0 and azimuthal modes at the wavelength nodes (1 + s multiplies the
-        # separable lobe), linear in λ between
-        sn = np.zeros(K + 1)
-        if do_ms:
-            w00 = (1.0 - fai) * (1.0 - fao)
-            w01 = (1.0 - fai) * fao
-            w10 = fai * (1.0 - fao)
-            w11 = fai * fao
-            for k in range(K):
-                s = (C[ai0, ao0, k, 0] * w00 + C[ai0, ao0 + 1, k, 0] * w01 + C[ai0 + 1, ao0, k, 0] * w10
-                     + C[ai0 + 1, ao0 + 1, k, 0] * w11)
-                if cphi <= 1.0:
-                    c_prev, c_cur = 1.0, cphi
-                    for m in range(1, M + 1):
-                        s += 2.0 * c_cur * (C[ai0, ao0, k, m] * w00 + C[ai0, ao0 + 1, k, m] * w01
-                                            + C[ai0 + 1, ao0, k, m] * w10 + C[ai0 + 1, ao0 + 1, k, m] * w11)
-                        c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
-                sn[k] = max(s, -1.0)
-            sn[K] = sn[K - 1]
         has_z0 = z0 > 0.0
         has_below = dz < 1.0
         xs = min(max((S2 - 2.0) / s2_step, 0.0), NS2 - 1.000001)
         js = int(xs)
         fs = xs - js
         e_t0 = np.exp(-tau_e[0] * S)
+        # the lobe's polar shape c_0 and azimuthal modes at the wavelength nodes (1 + s multiplies
+        # the separable lobe), linear in λ between; lk is non-decreasing: each node's sum once
+        kcur = -1
+        s_lo = 0.0
+        s_hi = 0.0
         for l in range(L):  # few branches, all the same for every l
+            sl = 0.0
+            if do_ms:
+                k = lk[l]
+                if k != kcur:
+                    s_lo = s_hi if kcur >= 0 and k == kcur + 1 else _lobe_sum_nb(C, k, ai0, fai, ao0, fao, cphi)
+                    s_hi = _lobe_sum_nb(C, min(k + 1, K - 1), ai0, fai, ao0, fao, cphi)
+                    kcur = k
+                sl = s_lo * (1.0 - lw[l]) + s_hi * lw[l]
             x = tau_e[l] * S + kd[l] * S2
             e = Qd[js, l] * (1.0 - fs) + Qd[js + 1, l] * fs
             if tau_e_const:
@@ -322,7 +316,6 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
             val = ((Tc[i0, l] * (1.0 - fi) + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo)
                    * inv_n2 * (fl + eb))
             val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
-            sl = sn[lk[l]] * (1.0 - lw[l]) + sn[lk[l] + 1] * lw[l]
             val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
                     * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l] * (1.0 + sl))
             out[p, l] = val
