@@ -399,8 +399,12 @@ CASES = {
 
 def _timings(ours, rivals, repeat):
     """Median seconds of nmmm and of each rival, timed in alternation (each repeat times all
-    of them, so a change of machine load hits both). For the FFT case ``ours`` is
-    (run of 2 + k iterations, run of 2, k): per-iteration difference, rival divided by k."""
+    of them, so a change of machine load hits both), the order rotated by one each repeat so
+    that each callable follows each other one equally often: a BLAS call leaves OpenBLAS's
+    worker spinning for a while, which slowed whatever ran right after the NumPy floor (at 2
+    threads nmmm's CIELAB took 58 ms alone, 104-116 ms right after ``R @ W``). For the FFT
+    case ``ours`` is (run of 2 + k iterations, run of 2, k): per-iteration difference, rival
+    divided by k."""
     import statistics
 
     fft = isinstance(ours, tuple)
@@ -409,10 +413,11 @@ def _timings(ours, rivals, repeat):
     for f in fns:
         f()  # compile, fill caches, plan FFTs
     ts = [[] for _ in fns]
-    for _ in range(repeat):
-        for i, f in enumerate(fns):
+    for r in range(repeat):
+        for j in range(len(fns)):
+            i = (j + r) % len(fns)
             t = time.perf_counter()
-            f()
+            fns[i]()
             ts[i].append(time.perf_counter() - t)
     med = [statistics.median(t) for t in ts]
     if fft:
