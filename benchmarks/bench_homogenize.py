@@ -21,6 +21,29 @@ Usage::
 The machine's cores are shared: ratios measured in the same run are meaningful, absolute
 times less so.
 
+Session 5, 2026-12-04: why 2 threads did not scale (issue 22; 128³ complex64, willot2015)
+-------------------------------------------------------------------------------------
+Measured with per-thread CPU times (/proc/self/task) because the shared machine stayed at load
+5-8 all session, where wall-clock ratios at 2 threads moved by ±30 % between identical runs.
+- The element-wise passes ran on ONE thread at "2 threads": the parallel=True and serial Numba
+  builds of each kernel shared one on-disk cache entry (Numba keys it by function and
+  signature, not options), so after a small serial call had filled the cache the "parallel"
+  kernels were serial builds. Per iteration at 2 threads: main thread 54-60 ms CPU (direction
+  + ε 25, potential 8, stencil update 25: all serial), the FFT threads 32-39 each.
+- With the parallel builds restored, Numba's OpenMP workers spin after each kernel on the
+  cores that the next scipy.fft call needs: 233 ms CPU per iteration at 2 threads against
+  153 ms at 1 (load 7-8).
+- Now (kernels.py): serial GIL-free builds over ranges of planes/chunks on a small Python
+  thread pool: 130-132 ms CPU per iteration at 2 threads vs 125-130 at 1, spread over 4 threads
+  at 29-40 ms each (main + pool thread for the kernels, 2 FFT threads); the kernels' own cost
+  unchanged (update 24 ms, direction 23, potential 6.4 at 1 thread).
+- ``run_all.py --only fft``, iteration / bare pair, alternating old and new code, load 4.4-7.6:
+  before (c74fd96) 1 thread 1.19, 1.21; 2 threads 1.24, 1.29 — in both runs the bare pair was
+  no faster at 2 threads than at 1 (101/101, 204/204 ms): the load left about one core, so
+  these rows cannot show 2-thread scaling; after: 1 thread 1.22, 1.51; 2 threads 1.18, 1.28.
+  On a quiet machine the CPU split above predicts about (55/2 + 70/2) / (100/2) ≈ 1.25 at 2
+  threads (kernels and 3+1 FFTs halved, the bare pair halved): not measured here.
+
 Session 4, 2026-12-02 (after the rank-one form of Γ: 3 forward FFTs + 1 inverse per iteration)
 -------------------------------------------------------------------------------------
 - Iteration / bare FFT pair (6 FFTs), 128³ complex64, Boolean spheres, willot2015:
