@@ -41,19 +41,111 @@ def test_grey_metallic_recipe_and_demo_paint_give_identical_multiangle_cielab():
     assert res.scalars["flake_optical_depth"] == pytest.approx(paint.flakes.optical_depth, rel=1e-12)
 
 
+# grey_metallic's far side, measured by the Monte-Carlo tracer of tests/appearance/test_brdf_montecarlo.py on the
+# recipe's exact coat (test_grey_metallic_far_side_is_flat_by_the_tracer, 8e6 photons, θi = 45°, light side,
+# φ 165-180°): f(θo 60-70°) / f(θo 25-35°), i.e. 110° over 75° aspecular, = 1.003 ± 0.008 (1 SE) at 450/550/650 nm
+GREY_FAR_RATIO_TRACER, GREY_FAR_RATIO_SE = 1.003, 0.008
+
+
+def _Y(L):  # CIE 1976 lightness inverted (L* > 8): relative luminance Y/Yn
+    return ((np.asarray(L, float) + 16.0) / 116.0) ** 3
+
+
 @pytest.mark.parametrize("name", EFFECT_RECIPES)
 def test_shipped_effect_recipes_fall_in_lightness_and_flop_in_range(name):
     res = _run(_raw(name, step_nm=10.0))
     Ls = {m["aspecular_deg"]: m["L"] for m in res.multiangle}
-    seq = [Ls[a] for a in (15.0, 25.0, 45.0, 75.0, 110.0) if a in Ls]
-    assert len(seq) >= 4
-    # flakes lying near the surface: L* falls from 15° to 110° aspecular (McCamy 1996; ASTM E2194)
+    seq = [Ls[a] for a in (15.0, 25.0, 45.0, 75.0)]
+    # flakes lying near the surface: L* falls from 15° to 75° aspecular (McCamy 1996; ASTM E2194)
     assert all(a > b for a, b in zip(seq, seq[1:])), seq
+    # ... and on to 110° where the physics says so (issue 18's acceptance). Beyond 75° the flakes' lobe is spent and
+    # what is left is diffuse: the primer seen through the flake layer, light from flake to flake, rims. The red
+    # metallic's pigment and the pearl's interference flakes keep darkening there; grey_metallic's mirror flakes
+    # (τ 0.51 over a 0.35 grey primer) leave a far side that the tracer finds flat (GREY_FAR_RATIO_TRACER), so its
+    # 110°/75° luminance ratio is held to the tracer's measurement within 4 SE: in-plane, as L* is computed, the
+    # model gives 1.020 (its azimuth modes brighten the plane of incidence on the light side: 1.011 averaged over
+    # the tracer's φ 165-180° bin, where the tracer's 1.003 ± 0.008 agrees with it; test below)
+    if name == "grey_metallic":
+        ratio = _Y(Ls[110.0]) / _Y(Ls[75.0])
+        assert abs(ratio - GREY_FAR_RATIO_TRACER) < 4 * GREY_FAR_RATIO_SE, (Ls, ratio)
+    else:
+        assert Ls[75.0] > Ls[110.0], Ls
     fi = res.scalars["flop_index"]
     # Alman (1987) flop index of effect paints: silver metallics up to ~15-17; darker coloured effect paints
     # (low L*45) somewhat higher; a solid is ~0
     assert 5.0 < fi < 25.0, fi
     assert res.scalars["flake_optical_depth"] > 0.1
+
+
+def _montecarlo_module():
+    """tests/appearance/test_brdf_montecarlo.py (its photon tracer ``trace_coat``), loaded by path."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "appearance" / "test_brdf_montecarlo.py"
+    spec = importlib.util.spec_from_file_location("_nmmm_brdf_montecarlo", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.slow
+def test_grey_metallic_far_side_is_flat_by_the_tracer():
+    """The independent check behind GREY_FAR_RATIO_TRACER: the Monte-Carlo photon tracer of
+    tests/appearance/test_brdf_montecarlo.py (``trace_coat``: delta tracking through the flake band, Fresnel of the
+    Al flakes, Lambertian primer, smooth coat) on the recipe's exact coat — the deposit's tilt density (sampled
+    as is), τ = 0.513 in the band z 0.556-1 of the 20 µm basecoat, clear binder n = 1.5, primer 0.35 — at
+    θi = 45°, light side (φ 150-180° and 165-180°, folded), θo 25-35° (75° aspecular) and 60-70° (110°), 450/550/650 nm.
+    8e6 photons in 16 runs of 5e5 (61 s of one core, loaded machine). Measured: f(60-70°)/f(25-35°) = 1.0051 /
+    1.0034 / 1.0011 ± 0.0078 (φ 165-180°; model 1.0126 / 1.0107 / 1.0083) and 1.0075 / 1.0058 / 1.0035 ± 0.0055
+    (φ 150-180°; model 1.0035 / 1.0018 / 0.9996; the model before review P gave 0.974 in its author's light-side
+    bins, which would be 6 SE off here); every bin within 2.9 SE (bin SE 0.55 %; the model is 0-1.6 % low). The
+    ratio's SE treats the two bins as independent (they share photons only through light that escapes twice,
+    which correlates them positively: the true SE is smaller). Asserted: bins within 4 SE + 0.1 %, model ratio
+    within 4 SE of the tracer's, the tracer's ratio within 4 SE of 1 (flat) and equal to the recorded constant."""
+    mc = _montecarlo_module()
+    from nmmm.appearance.deposit import grey_metallic_coat
+
+    W = mc.WAVELENGTHS
+    raw = _raw("grey_metallic")
+    rec = parse_recipe(raw, base_dir=example_path("grey_metallic").parent)
+    from nmmm.recipes.effect_schema import build_effect_coat
+
+    paint, _ = build_effect_coat(rec.effect, {}, name="grey").brdf(W)
+    ref, _ = grey_metallic_coat().brdf(W)  # the recipe's coat is the demo's (test above): same flakes
+    fl = paint.flakes
+    assert fl.optical_depth == pytest.approx(ref.flakes.optical_depth, rel=1e-12)
+    assert paint.medium is None and fl.surface_roughness == 0.0 and fl.edge_fraction == 0.0
+    n = float(paint.coat.material)
+    rho = np.asarray(paint.body_reflectance[1], float)
+    te, pe = (25.0, 35.0, 60.0, 70.0), (150.0, 165.0, 180.0)
+    runs, n_run = 16, 500_000
+    S, SE = [], []
+    for k in range(runs):
+        r = mc.trace_coat(45.0, fl.optical_depth, fl.optics.material.nk(W), fl.tilt, np.zeros(W.size), 0.0, 0.0,
+                          fl.depth_range, rho=rho, n=n, n_photons=n_run, theta_edges_deg=te, phi_edges_deg=pe,
+                          seed=1800 + k)
+        S.append(r["bins"])
+        SE.append(r["bins_se"])
+    T = np.mean(S, axis=0)  # (θ bin, φ bin, λ)
+    Tse = np.sqrt(np.sum(np.square(SE), axis=0)) / runs
+    b = paint.bin_average(W, mc._wi(45.0), te, pe, n_quad=24)
+    tol = mc.N_SE * Tse + mc.MODEL_TOL_BINS * T
+    rows = [0, 2]  # θo 25-35° and 60-70°
+    assert np.all(np.abs(b[rows] - T[rows]) < tol[rows]), np.round((b - T) / Tse, 1)[rows]
+    for cols in ([0, 1], [1]):  # φ 150-180° (two bins of equal width) and 165-180°
+        t75, t110 = T[0, cols].mean(axis=0), T[2, cols].mean(axis=0)
+        s75 = np.sqrt(np.sum(Tse[0, cols] ** 2, axis=0)) / len(cols)
+        s110 = np.sqrt(np.sum(Tse[2, cols] ** 2, axis=0)) / len(cols)
+        rt = t110 / t75
+        rse = rt * np.hypot(s110 / t110, s75 / t75)
+        rm = b[2, cols].mean(axis=0) / b[0, cols].mean(axis=0)
+        assert np.all(np.abs(rm - rt) < mc.N_SE * rse), (cols, rt, rse, rm)
+        # flat within the tracer's error: what the quick test's GREY_FAR_RATIO_TRACER records
+        assert np.all(np.abs(rt - 1.0) < mc.N_SE * rse), (cols, rt, rse)
+        if cols == [1]:
+            assert np.all(np.abs(rt - GREY_FAR_RATIO_TRACER) < 0.5 * GREY_FAR_RATIO_SE + 0.003), rt
+            assert np.all(np.abs(rse - GREY_FAR_RATIO_SE) < 0.001), rse
 
 
 def test_coloured_recipes_are_coloured():
@@ -152,7 +244,12 @@ def test_demo_coloured_coats_are_the_recipes():
 def test_flake_face_roughness_and_rims_reach_the_brdf():
     """[effect.flakes] face_roughness (GGX α of the faces) and edge_width_nm (rim width w, f_e = 4 w / ⟨D⟩) are the
     FlakeLayer's surface_roughness and edge_fraction; both default to 0 (mirror flakes, the renderer's glints). Rough
-    faces and rims lift the far side: L* falls more from 75° to 110° than with mirror flakes (review O)."""
+    faces spread each flake's mirror into a GGX lobe whose tail still reaches 75° aspecular but hardly 110°; rims
+    scatter diffusely (∝ the flakes' projected area both ways), adding about as much at both angles. So the far side
+    falls by more than with mirror flakes, whose far side is flat (grey_metallic: tracer above), and the
+    near-specular peak is lower and wider. Measured (20 nm grid, 550 nm, 1/sr, rough + rims vs mirror): one-flake
+    term 1.3e-3 / 3.2e-4 at 75° / 110° vs 1e-5 / 0, multiple lobe 0.0140 / 0.0155 vs 0.0085 / 0.0105;
+    L*75 - L*110 = 0.58 against -0.33."""
     from nmmm.appearance.deposit import grey_metallic_coat
     from nmmm.recipes.effect_schema import build_effect_coat
 
@@ -167,7 +264,10 @@ def test_flake_face_roughness_and_rims_reach_the_brdf():
     assert p1.flakes.edge_fraction == pytest.approx(4 * 500.0 / 20e3, rel=1e-12)
     L = {m["aspecular_deg"]: m["L"] for m in _run(rough).multiangle}
     L0 = {m["aspecular_deg"]: m["L"] for m in _run(raw).multiangle}
-    assert L[75.0] - L[110.0] > 5 * (L0[75.0] - L0[110.0]) > 0
+    # margin: the largest bin error of the model that the 6e5-photon tracer left for rough faces and rims (2.1 %,
+    # rough + rims + pigment, tests/appearance/test_brdf_montecarlo.py, review P) as L* at 75°: dL* = (L* + 16)/3 · dY/Y ≈ 0.35
+    margin = (L0[75.0] + 16.0) / 3.0 * 0.021
+    assert L[75.0] - L[110.0] > (L0[75.0] - L0[110.0]) + margin, (L, L0, margin)
     assert L[15.0] < L0[15.0]  # the near-specular lobe is widened
 
 

@@ -484,9 +484,14 @@ class FlakeLayer:
     surface_roughness : float, default 0
         GGX α of the flake faces (a microfacet lobe per flake; :meth:`TiltDistribution.roughened`).
     edge_fraction : float, default 0
-        Fraction of the light meeting a flake that its edges scatter diffusely (isotropically,
-        with the flake's mean reflectance) instead of mirroring:
-        :func:`edge_scatter_fraction` (perimeter/area × edge width) gives it from the diameter.
+        Fraction of the light meeting a flake that its rims scatter diffusely instead of mirroring,
+        with the flake's mean (hemispherical) reflectance. Rims take light in proportion to the
+        flakes' projected area a(ui) = E_m|ui·m| along the incoming direction (as every flake
+        interaction does) and send it over the whole sphere, up and down, with intensity ∝ a(uo),
+        the projected area along the outgoing direction: the kernel a(ui) a(uo) is reciprocal
+        (Helmholtz), with no memory of the incoming azimuth (not isotropic emission, which is not
+        reciprocal). :func:`edge_scatter_fraction` (perimeter/area × edge width) gives it from the
+        diameter.
     """
 
     optics: object
