@@ -46,6 +46,7 @@ References
 from __future__ import annotations
 
 import math
+import types
 from dataclasses import dataclass
 
 import numba
@@ -406,9 +407,19 @@ def _mie_batch(m, x, mu, out, s1, s2, nchunk):
                 _one_particle(m[b], x[b], mu, out[b], s1[b], s2[b])
 
 
+def _serial_copy(fn):
+    """``fn`` under its own qualified name. Numba's on-disk cache names an entry by module,
+    qualified name, first line and signature, not by ``parallel=``: ``njit(cache=True)`` of the
+    same function as a ``parallel=True`` build shares its entry, and whichever build compiled
+    first then serves both (found in homogenize's kernels, issue 22)."""
+    ser = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__ + "_serial", fn.__defaults__, fn.__closure__)
+    ser.__qualname__ = fn.__qualname__ + "_serial"
+    return ser
+
+
 #: The same kernel compiled without threads: small batches run here, since waking the thread
 #: pool costs ~10 µs on an idle machine and up to ~10 ms on a loaded one (issue 22).
-_mie_batch_serial = numba.njit(cache=True)(_mie_batch.py_func)
+_mie_batch_serial = numba.njit(cache=True)(_serial_copy(_mie_batch.py_func))
 
 #: Series terms (Σ over particles of ~(x + 4 x^⅓ + 2) · (1 + angles)) above which a batch is
 #: worth the parallel launch.
