@@ -233,4 +233,5 @@ def test_reaching_maxiter_while_converging_does_not_try_bicgstab():
             fft_permittivity(lab, {0: 2.25, 1: -50 + 2j}, green="willot2015", tol=1e-10, maxiter=200,
                              directions=[0], workers=1)
     assert set(exc.value.history) == {"cocg"}
+    assert "maxiter ≈" in str(exc.value)  # the error says how many projections the prediction asks for
 

@@ -612,13 +612,14 @@ def fft_permittivity(
                     hist = {(a.solver if a.green == op.name else f"{a.solver}@{a.green}"): a.history for a in attempts}
                     where = f" at wavelength index {w}" if not scalar else ""
                     slow = [predicted_projections(a.history, tol) for a in attempts
-                            if a.message.startswith("predicted slow")]
+                            if a.message.startswith(("predicted slow", "COCG reached maxiter")) and a.iterations > PREDICT[0]]
                     hint = ("Metal-like contrasts at sharp corners (e.g. a checkerboard) may have no "
                             "converging solution; try another Green operator, a larger maxiter, or a looser tol")
                     if slow and np.isfinite(min(slow)):
                         hint = (f"A low-loss metal near a plasmon resonance of the cell makes the system near-singular "
                                 f"(no solver or operator converges fast); maxiter ≈ {1.2 * min(slow):.0f} would "
-                                "likely do (the prediction errs long), or a looser tol")
+                                "likely do (extrapolated from the residual history; it errs long early in a solve), "
+                                "or a looser tol")
                     raise ConvergenceError(
                         f"FFT homogenization did not converge for loading e{j}{where} with eps = "
                         f"{np.round(tab, 4).tolist()}: " + "; ".join(a.message for a in attempts) + ". " + hint,
