@@ -12,16 +12,79 @@ Usage::
 
     python benchmarks/bench_fft_metals.py                       # 64³, all cells and metals
     python benchmarks/bench_fft_metals.py --grids 64 128        # also 128³ (≈ 1-3 min per row)
-    python benchmarks/bench_fft_metals.py --compare --cases boolean --eps -50+2j
+    python benchmarks/bench_fft_metals.py --compare --cases boolean --eps=-50+2j
     python benchmarks/bench_fft_metals.py --spectrum 64         # aluminium (Rakić), 81 λ, warm starts
     python benchmarks/bench_fft_metals.py --spectrum 64 --scheduler local   # the same on 2 Dask workers
     python benchmarks/bench_fft_metals.py --speedup 64 --n-wavelengths 16   # 1 process vs 2 Dask workers
     python benchmarks/bench_fft_metals.py --spectrum 128 --lanczos --spectrum-loadings 0   # one Lanczos run
+    python benchmarks/bench_fft_metals.py --spectrum 64 --spectrum-loadings 0 --method auto   # what the API chooses
 
 Cells: Boolean spheres p = 0.2, radius 5 voxels at 64³ (scaled with the grid); hard-core (RSA)
 spheres p = 0.2, same radius; flakes: discs of radius n/6, 2 voxels thick, lying flat, ~10 %.
 The machine's cores are shared: times are wall times of this run, iteration counts are not
 affected by the load.
+
+What the default path does (issue 22): ``green=None`` takes willot2014 and complex128 for a 3-D cell
+with a low-loss metal (reported); a COCG whose residual, extrapolated from the last half of its
+history, would need more than 5 × maxiter projections is stopped from 150 projections on
+(``fft.PREDICT``) and COCG with the other Willot operator takes over (reported with the projections
+run, the residual reached and the prediction); BiCGStab/GMRES are not tried after such a stop (they
+measured worse there, below). Over several wavelengths a two-phase cell without a low-loss metal is
+solved by one Lanczos run per loading when estimated cheaper (``method="auto"``, reported).
+
+Measured, session 5 (2026-12-04, load 4-7 on 2 cores, defaults, complex64 asked, tol 1e-5, x, maxiter 500)
+-----------------------------------------------------------------------------------------------
+``python bench_fft_metals.py --grids 64 --maxiter 500`` — every case converges within 500, no
+early stop fired (switches: willot2015→willot2014 and complex64→complex128 for the three low-loss
+metals, chosen before the solve):
+
+| cell | grid | ε metal | operator | projections | time (s) |
+|---|---|---|---|---|---|
+| boolean (0.20) | 64³ | −50+1i | willot2014 c128 | 304 | 10.5 |
+| boolean (0.20) | 64³ | −50+2i | willot2014 c128 | 293 | 6.5 |
+| boolean (0.20) | 64³ | −50+5i | willot2014 c128 | 276 | 7.1 |
+| boolean (0.20) | 64³ | −44+13i | willot2015 c64 | 181 | 3.8 |
+| hardcore (0.20) | 64³ | −50+1i | willot2014 c128 | 118 | 3.9 |
+| hardcore (0.20) | 64³ | −50+2i | willot2014 c128 | 117 | 3.4 |
+| hardcore (0.20) | 64³ | −50+5i | willot2014 c128 | 111 | 3.1 |
+| hardcore (0.20) | 64³ | −44+13i | willot2015 c64 | 154 | 2.0 |
+| flakes (0.10) | 64³ | −50+1i | willot2014 c128 | 498 | 7.1 |
+| flakes (0.10) | 64³ | −50+2i | willot2014 c128 | 431 | 9.2 |
+| flakes (0.10) | 64³ | −50+5i | willot2014 c128 | 291 | 9.1 |
+| flakes (0.10) | 64³ | −44+13i | willot2015 c64 | 199 | 4.3 |
+
+128³ flakes (``--grids 128 --cases flakes --maxiter 500``):
+
+| cell | grid | ε metal | what happened (maxiter 500) | projections | time (s) |
+|---|---|---|---|---|---|
+| flakes (0.10) | 128³ | −44+13i | willot2015 c64, converged | 199 | 54 |
+| flakes (0.10) | 128³ | −50+5i | willot2014 c128 to 500 (best 5.2e-5), then COCG/willot2015 to 500 (7.3e-5): ConvergenceError | 1000 | 360 |
+| flakes (0.10) | 128³ | −50+2i | willot2014 c128 to 500 (best 0.028), then COCG/willot2015 to 500 (0.036): ConvergenceError | 1000 | 348 |
+| flakes (0.10) | 128³ | −50+1i | predicted slow at 150 on each operator (residual not below 1: ∞): ConvergenceError | 300 | 106 |
+
+So at 128³ the flakes at −50+1..5i are not within 500 (the near-resonant cell, above); the
+early stop saves 700 of the 1000 projections at −50+1i and, before this session, BiCGStab and
+GMRES would each have added 500 more. At −50+2i the extrapolation at 150-500 stayed under 5 ×
+maxiter, so both operators ran to maxiter; COCG/willot2014 left alone (maxiter 2000): converged in 1346
+projections (551 s; best residual 0.65 at 150, 0.028 at 500, 3e-4 at 1000), fewer than the 1505 of the
+Lanczos run above; its prediction said 2115 at 150, 1627 at 300, 1345 at 500 — so the
+ConvergenceError now names maxiter ≈ 1.2 × the prediction (1614 here).
+
+What the switches were measured against (64³ flakes, −50+1i, complex128, 600 projections each,
+``SOLVERS`` directly): COCG/willot2014 converges in 495; BiCGStab/willot2014 best residual 0.11;
+GMRES(30)/willot2014 0.027 (201 s); COCG/willot2015 0.13. Lanczos (two_phase_spectrum,
+no reorthogonalisation) with the same operator: 1284 steps to its estimated 1e-5 and ε_xx 2.3e-3
+away from COCG's (whose true residual, from the formed field, is 9.7e-6) — so ``method="auto"``
+keeps COCG for low-loss metals; at −44+13i the two agree to 4e-11 in 181 projections each.
+The prediction errs long on near-resonant cells (superlinear convergence): 16³ Boolean −50+2i, tol
+1e-8, converges in 531 while the extrapolation said 2308 at 150 and 1018 at 300 — hence the margin 5.
+The flux converges much faster than the residual: Lanczos on 64³ flakes −50+1i / −50+2i gives
+ε_xx within 1.3e-5 / 2.6e-5 of its tol-1e-7 value at a residual of 1e-2, 4.3e-7 at 1e-3.
+
+81-λ aluminium (Rakić) on the 64³ flake cell, x, complex64, tol 1e-5 (``--spectrum 64
+--spectrum-loadings 0 --method auto`` / ``per_wavelength``): one Lanczos run 211 projections,
+21.6 s (chosen by ``method="auto"``); per-wavelength COCG with warm starts 9336 projections
+(64-227 per wavelength), 251 s; ε_xx equal to 4 decimals at 380, 580 and 780 nm.
 
 Measured, session 4 (2026-12-02, load 10-12 on 2 cores, defaults, complex64 asked, tol 1e-5, x)
 ------------------------------------------------------------------------------------------
@@ -34,6 +97,9 @@ Review Q, the same 128³ cell, one real Lanczos run on Γ χ Γ (willot2015, x; 
 COCG's at every ε, two_phase_spectrum): to 1e-5 −44+13i 199, −50+5i 600, −50+2i 1505; −50+1i at
 8.7e-4 after 1900 (≈ 3000 at its rate); Al (Rakić) 380 nm 216, 580 nm 180. Projections grow as
 1/|Im s|, s = ε_h/(ε_m − ε_h) (|Im s| 1.3e-2, 4.1e-3, 1.6e-3, 8.2e-4): a near-singular system.
+(Session 5: "its per-shift residual is COCG's" holds in exact arithmetic only — at 64³ with a
+low-loss metal Lanczos took 1.4-2.6× COCG's projections and drifted from it, see above, so
+these Lanczos counts overstate COCG's.)
 Its Bergman measure of e_x has 27 % of its weight at μ ∈ [0.02, 0.05), largest nodes near 0.03
 (ε_res ≈ −73; overlapping discs are wider than one), where −50 + 1..5i put μ_res = 0.043.
 Why the 128³ flakes are hard: the flakes here keep 2 voxels of thickness at every grid, so at
@@ -93,16 +159,29 @@ def run(lab, eps, **kw):
             r = fft_permittivity(lab, eps, dtype="complex64", tol=1e-5, directions=[0], progress=False, **kw)
         except ConvergenceError as e:
             its = sum(len(h) - 1 for h in e.history.values())
-            return None, its, time.perf_counter() - t, "no convergence: " + str(e).split(": ", 1)[-1][:120]
+            return None, its, time.perf_counter() - t, describe_error(e)
     return r, int(np.sum(r.iterations)), time.perf_counter() - t, ""
 
 
 def describe_switches(r) -> str:
+    """Each automatic switch: from→to, and for a solve stopped early the projections it ran, the
+    residual it reached and the projections its extrapolation predicted."""
     out = []
     for s in r.switches:
         where = f" @λ{s['wavelength_index']}" if "wavelength_index" in s else ""
-        out.append(f"{s['from']}→{s['to']}{where}")
+        extra = ""
+        if "residual_reached" in s:
+            pred = s["predicted_projections"]
+            extra = (f" (stopped at {s['projections']}: residual {s['residual_reached']:.2g}, predicted "
+                     f"{'∞' if not np.isfinite(pred) else f'{pred:.0f}'})")
+        out.append(f"{s['from']}→{s['to']}{where}{extra}")
     return "; ".join(out) or "-"
+
+
+def describe_error(e) -> str:
+    """The attempts of a ConvergenceError: solver@operator: projections, best residual."""
+    parts = [f"{k}: {len(h) - 1} proj, best {min(h):.2g}" for k, h in e.history.items()]
+    return "no convergence — " + "; ".join(parts)
 
 
 def table(cases, grids, metals, compare: bool, maxiter: int):
@@ -120,8 +199,8 @@ def table(cases, grids, metals, compare: bool, maxiter: int):
                 for label, kw in variants:
                     r, its, wall, msg = run(lab, eps, maxiter=maxiter, **kw)
                     if r is None:
-                        print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {label} | {msg} | >{its} | no | {wall:.1f} | - |",
-                              flush=True)
+                        print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {label} | {msg} | {its} (all attempts) | no | "
+                              f"{wall:.1f} | - |", flush=True)
                         continue
                     op = r.green if label == "default" else label
                     print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {op} | {describe_switches(r)} | {its} | "
@@ -129,7 +208,8 @@ def table(cases, grids, metals, compare: bool, maxiter: int):
                           flush=True)
 
 
-def spectrum(n: int, directions, scheduler=None, nwl: int = 81, workers: int = 2, lanczos: bool = False):
+def spectrum(n: int, directions, scheduler=None, nwl: int = 81, workers: int = 2, lanczos: bool = False,
+             method: str = "per_wavelength"):
     from nmmm.homogenize import fft_permittivity_spectrum, two_phase_spectrum
 
     w, eps_al = aluminium(nwl)
@@ -140,6 +220,9 @@ def spectrum(n: int, directions, scheduler=None, nwl: int = 81, workers: int = 2
     print(f"\n## Aluminium (Rakić) flakes {n}³ ({lab.mean():.3f}), {nwl} wavelengths 380-780 nm, "
           f"complex64, tol 1e-5, warm starts, loadings {directions}, {where}")
     kw = dict(dtype="complex64", tol=1e-5, directions=directions, max_minutes=float("inf"))
+    if not lanczos and not scheduler:
+        kw["method"] = method
+        where += f", method={method}"
     t = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -152,7 +235,7 @@ def spectrum(n: int, directions, scheduler=None, nwl: int = 81, workers: int = 2
             r = fft_permittivity(lab, {0: HOST, 1: eps_al}, progress=False, **kw)
     wall = time.perf_counter() - t
     its = np.asarray(r.iterations)
-    if lanczos:  # steps at which each wavelength converged; the run costs the largest per loading
+    if lanczos or r.metadata.get("method") == "lanczos":  # the run costs its slowest wavelength per loading
         its = np.asarray(r.metadata["projections"])
         print(f"  Lanczos steps at which the wavelengths converged: min {np.min(r.iterations)}, "
               f"max {np.max(r.iterations)}")
@@ -209,7 +292,9 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--grids", type=int, nargs="+", default=[64])
     ap.add_argument("--cases", nargs="+", default=["boolean", "hardcore", "flakes"])
-    ap.add_argument("--eps", nargs="+", type=complex, default=list(METALS))
+    ap.add_argument("--eps", type=lambda t: [complex(x) for x in t.split(",")], default=list(METALS),
+                    help="metal permittivities, comma-separated, e.g. --eps=-50+2j,-44+13j (the '=' keeps argparse "
+                         "from reading -50+2j as an option)")
     ap.add_argument("--compare", action="store_true", help="also each Willot operator alone (no fallback)")
     ap.add_argument("--maxiter", type=int, default=2000)
     ap.add_argument("--spectrum", type=int, metavar="N", help="run the 81-λ aluminium flake spectrum at N³")
@@ -218,6 +303,8 @@ def main(argv=None):
     ap.add_argument("--scheduler", help="'local' (LocalCluster) or tcp://HOST:8786: spread --spectrum over Dask")
     ap.add_argument("--dask-workers", type=int, default=2)
     ap.add_argument("--lanczos", action="store_true", help="--spectrum by two_phase_spectrum (one run per loading)")
+    ap.add_argument("--method", default="per_wavelength", choices=["auto", "per_wavelength", "lanczos"],
+                    help="--spectrum: fft_permittivity's method= (default per_wavelength, the warm-started solves)")
     ap.add_argument("--speedup", type=int, metavar="N", help="1 process vs --dask-workers Dask workers at N³")
     args = ap.parse_args(argv)
     print(f"# FFT homogenization of metal-dielectric cells (load average {os.getloadavg()[0]:.1f}, "
@@ -226,7 +313,7 @@ def main(argv=None):
         speedup(args.speedup, args.n_wavelengths, args.spectrum_loadings, args.dask_workers)
     elif args.spectrum:
         spectrum(args.spectrum, args.spectrum_loadings, args.scheduler, args.n_wavelengths, args.dask_workers,
-                 args.lanczos)
+                 args.lanczos, args.method)
     else:
         table(args.cases, args.grids, args.eps, args.compare, args.maxiter)
 
