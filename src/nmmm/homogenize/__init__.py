@@ -48,9 +48,18 @@ Known limitations
   118-304 (benchmarks/bench_fft_metals.py).
 - Low-loss metal platelets near their in-plane plasmon resonance (ε_m ≈ ε_h (1 − 1/L), L the
   depolarisation factor; e.g. 2-voxel discs of radius 21 in 2.25 at ε = −50 + 1..5i) are
-  near-singular: 562 projections at −50 + 5i on 128³, 1505 at −50 + 2i and ≈ 3000 at −50 + 1i
-  (Lanczos ≡ COCG, x loading; the count grows as 1/|Im s|, s = ε_h/(ε_m − ε_h)). Real aluminium
+  near-singular (the count grows as 1/|Im s|, s = ε_h/(ε_m − ε_h)). On 128³, x loading, complex128
+  COCG: −50 + 5i does not reach tol 1e-5 in 500 projections with either Willot operator (best
+  5.2e-5), −50 + 2i needs 1346 with ``willot2014`` (the Lanczos counts quoted before, 1505 and
+  ≈ 3000 at −50 + 1i, overstate COCG's), and at −50 + 1i COCG is stopped after 150 projections
+  as predicted never to converge; every such stop is in ``switches`` and the ConvergenceError
+  gives the maxiter the prediction asks for. At 64³ all twelve metal cases of
+  benchmarks/bench_fft_metals.py converge within 500 (flakes at −50 + 1i: 498). Real aluminium
   in the visible (Im ε ≥ 0.19 |ε|, |Im s| ≥ 0.013) is far from this: 118-216 projections per wavelength (x, y).
+- Lanczos (``method="lanczos"``, chosen by ``"auto"`` for two-phase spectra when cheaper) drifts
+  from COCG for a low-loss metal in finite precision (64³ flakes at −50 + 1i: 1284 steps against
+  COCG's 498, ε_xx 2.3e-3 apart, COCG's true residual 9.7e-6), so ``"auto"`` keeps per-wavelength
+  COCG there.
 """
 
 from nmmm.homogenize.fft import FFTHomogenization, fft_permittivity
