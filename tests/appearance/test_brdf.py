@@ -555,3 +555,27 @@ def test_shipped_red_metallic_reciprocity():
     v[..., 2] = np.abs(v[..., 2])
     v /= np.linalg.norm(v, axis=-1, keepdims=True)
     assert np.allclose(paint(W, v[0], v[1]), paint(W, v[1], v[0]), rtol=1e-10, atol=1e-14)
+
+
+def test_lobe_shape_is_one_kind_along_the_spectrum():
+    """The multiple lobe's polar shape c_0 comes from the transport or, where the transport disagrees
+    with terms 2-3 (transmitting interference flakes), is the separable lobe — for the whole paint,
+    not node by node: the shipped Fe2O3/mica pearl had the transport's shape at 480 and 780 nm and
+    the separable one at the other 7 nodes, its lobe factor jumping 0.03 -> 0.21 -> 0.05 over
+    430-530 nm. Al flakes keep the transport's shape."""
+    import tomllib
+
+    from nmmm.recipes.run import _effect_coat
+    from nmmm.recipes.schema import example_path, parse_recipe
+
+    w = np.linspace(380.0, 780.0, 41)
+    rec = parse_recipe(tomllib.loads(example_path("fe2o3_mica_pearl").read_text()),
+                       base_dir=example_path("fe2o3_mica_pearl").parent)
+    paint, _ = _effect_coat(rec, w=w).brdf(w)
+    tab = paint.prepare(w)
+    assert tab._ms_modes_spectral.shape[2] > 3 and np.any(np.abs(tab.ms_shape_mean) > 0.05)
+    # c_0 = 0 at every node (before: non-zero at 480 and 780 nm, zero at the 7 other nodes)
+    assert tab.ms_lobe_shape == "separable" and np.all(tab._ms_modes_spectral[..., 0] == 0.0)
+    assert np.all(tab.ms_albedo_factor == 1.0)
+    al = metallic_paint().prepare(w)
+    assert al.ms_lobe_shape == "transport" and np.all(np.abs(al.ms_shape_mean) <= 0.05)

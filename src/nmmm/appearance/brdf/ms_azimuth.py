@@ -230,10 +230,15 @@ def lobe_tables(tab, F, sel, ms, ms_lossless, th, mu, dmu):
     # (|c̄_0| ≤ 1e-3 for the Al and pigment paints of the Monte-Carlo tests). Where the
     # transport disagrees with terms 2–3 (|c̄_0| > 5 %: flakes that transmit, whose extinction
     # uses the mean transmission while their reflection is angle-resolved), c_0 = 0: the
-    # separable lobe, as before
+    # separable lobe, as before — at every node of the paint when it happens at any: a per-node
+    # choice switched c_0 on and off along λ (the shipped Fe2O3/mica pearl: transport at 480 and
+    # 780 nm, separable at the other 7 nodes, the lobe factor jumping 0.03 -> 0.21 -> 0.05 over
+    # 430-530 nm). ``tab.ms_lobe_shape`` says which lobe a paint has, ``tab.ms_shape_mean`` the c̄_0
     cbar = np.sum(wgt * (Wg @ mean_o(c0)), axis=0)  # (K,)
-    good = np.abs(cbar) <= 0.05
-    c0 = np.where(good[None, None, :], (1.0 + c0) / np.where(good, 1.0 + cbar, 1.0)[None, None, :] - 1.0, 0.0)
+    good = bool(np.all(np.abs(cbar) <= 0.05))
+    c0 = (1.0 + c0) / (1.0 + cbar)[None, None, :] - 1.0 if good else np.zeros_like(c0)
+    tab.ms_lobe_shape = "transport" if good else "separable"
+    tab.ms_shape_mean = cbar
     c0 = np.where(okF, c0, 0.0)
     okA = okF & (A0 > 0)
     modes = [np.where(okA, on_grid(Mm) / np.where(okA, A0, 1.0), 0.0) * (1.0 + c0) for Mm in ms[1:]]

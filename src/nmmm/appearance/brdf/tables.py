@@ -163,6 +163,7 @@ class _Tables:
         # directional albedo relative to (1 − E⁰) F_ms (ms_azimuth.lobe_tables)
         self.ms_albedo_factor = np.ones_like(self.Dms)
         self._ms_modes_spectral, self._ms_nodes = np.zeros((1, 1, 1, 0)), np.zeros(1, np.int64)
+        self.ms_lobe_shape = "separable"  # or "transport" (lobe_tables)
         if self.has_flakes and np.any(self.Kms > 0):
             azimuth_modes(self)
 
