@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import os
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from contextlib import contextmanager
 
 import numba
@@ -199,14 +199,16 @@ _pool: ThreadPoolExecutor | None = None
 _pool_lock = threading.Lock()
 
 
-def _executor(workers: int) -> ThreadPoolExecutor:
-    """The module's pool of kernel threads, with at least ``workers`` threads (grown on demand)."""
+def _executor() -> ThreadPoolExecutor:
+    """The module's pool of kernel threads, made once: room for NUMBA_NUM_THREADS − 1 threads, the
+    most any caller's Numba count asks for, started only as ranges wait for them. Never replaced
+    (a pool grown by shutting the old one down let a concurrent caller submit to the old one:
+    "cannot schedule new futures after shutdown")."""
     global _pool
     with _pool_lock:
-        if _pool is None or _pool._max_workers < workers:
-            old, _pool = _pool, ThreadPoolExecutor(max_workers=workers, thread_name_prefix="nmmm-kernel")
-            if old is not None:
-                old.shutdown(wait=False)
+        if _pool is None:
+            _pool = ThreadPoolExecutor(max_workers=max(1, numba.config.NUMBA_NUM_THREADS - 1),
+                                       thread_name_prefix="nmmm-kernel")
         return _pool
 
 
@@ -219,20 +221,39 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_pool)
 
 
+def _wait_all(futs) -> None:
+    """Wait until every range has finished: none may still write to the caller's arrays when the
+    call returns or raises. A KeyboardInterrupt while waiting waits again (a range lasts one pass
+    of one kernel) and is then raised."""
+    try:
+        wait(futs)
+    except BaseException:
+        wait(futs)
+        raise
+
+
 def _split(kernel, n_outer: int, field, *args) -> None:
     """Run ``kernel(*args, lo, hi)`` over 0..n_outer−1: one contiguous range per thread (Numba's
-    thread count of the caller) when ``field`` is large enough, else on the caller alone."""
+    thread count of the caller) when ``field`` is large enough, else on the caller alone. Returns
+    (or raises the first range's error) only when every range has finished."""
     k = min(numba.get_num_threads(), n_outer) if _parallel(field) else 1
     if k <= 1:
         kernel(*args, 0, n_outer)
         return
     edges = [(n_outer * i) // k for i in range(k + 1)]
-    futs = [_executor(k - 1).submit(kernel, *args, edges[i], edges[i + 1]) for i in range(1, k)]
+    pool = _executor()
+    futs = []
     try:
+        for i in range(1, k):
+            try:
+                futs.append(pool.submit(kernel, *args, edges[i], edges[i + 1]))
+            except RuntimeError:  # the pool is shut down (interpreter exit): the caller runs the range
+                kernel(*args, edges[i], edges[i + 1])
         kernel(*args, edges[0], edges[1])
     finally:
-        for f in futs:
-            f.result()
+        _wait_all(futs)
+    for f in futs:
+        f.result()
 
 
 def _column_sums(part) -> list:
