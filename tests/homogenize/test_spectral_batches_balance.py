@@ -89,6 +89,14 @@ def test_plan_keeps_lanczos_loadings_whole():
     assert pieces == [[(0, 8, (0, 2))], [(0, 8, (1,))]]
 
 
+@pytest.mark.parametrize("n_dirs,k", [(3, 4), (2, 3), (1, 8)])
+def test_plan_gives_lanczos_loadings_whole_with_more_tasks_than_loadings(n_dirs, k):
+    """More tasks than loadings: one loading per piece, never a loading cut over wavelengths (two
+    Lanczos runs in one task, each as long as its slowest wavelength)."""
+    pieces = _plan(np.linspace(5, 2, 8), n_dirs, k, whole_loadings=True)
+    assert pieces == [[(0, 8, (c,))] for c in range(n_dirs)]
+
+
 @pytest.fixture(scope="module")
 def client():
     distributed = pytest.importorskip("dask.distributed")

@@ -71,11 +71,14 @@ def _plan(work, n_dirs: int, k: int, whole_loadings: bool) -> list[list[tuple[in
     """Pieces (one per task) of the (loading, wavelength) solves: each a list of segments
     ``(lo, hi, loading positions)`` — wavelengths lo..hi−1 of those loadings, solved in one call.
 
-    ``whole_loadings``: loadings are not split over wavelengths; they go to the pieces in turn.
+    ``whole_loadings``: loadings are not split over wavelengths; they go to the pieces in turn
+    (at most one piece per loading: a Lanczos run lasts as long as its slowest wavelength, so a
+    loading cut in two would run twice as long in the piece that holds both of its runs).
     Otherwise the line of solves (loading after loading, each wavelength weighing ``work``, the
     first of a loading 1 / WARM_START_FRACTION) is cut into ``k`` pieces of equal weight."""
     nw = len(work)
-    if whole_loadings and n_dirs >= k:
+    if whole_loadings:
+        k = max(1, min(int(k), n_dirs))
         return [[(0, nw, tuple(range(i, n_dirs, k)))] for i in range(k)]
     weight = np.array(work, dtype=float)
     weight[0] /= WARM_START_FRACTION
