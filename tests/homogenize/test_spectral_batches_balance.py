@@ -128,3 +128,16 @@ def test_per_wavelength_spectrum_cut_inside_a_loading_equals_one_process(client)
     assert r.iterations[c, 1] >= ref.iterations[c, 1]
     assert (r.iterations[:, [0, 2]] == ref.iterations[:, [0, 2]]).all()
     assert r.switches == ref.switches and r.green == ref.green
+
+
+@pytest.mark.parametrize("n_chunks", [0, -1, 2.5, True])
+def test_n_chunks_must_be_a_positive_integer(n_chunks):
+    """Refused before any cluster starts (0 was taken as 'one per worker', -1 as one task, 2.5 as 2)."""
+    from nmmm.errors import InvalidInputError
+    from nmmm.homogenize.spectral_batches import fft_permittivity_spectrum
+
+    lab = np.zeros((8, 8, 8), np.uint8)
+    lab[:4] = 1
+    with pytest.raises(InvalidInputError, match="n_chunks"):
+        fft_permittivity_spectrum(lab, {0: np.full(3, 2.25), 1: np.full(3, -20 + 4j)}, n_chunks=n_chunks,
+                                  client=object())

@@ -193,6 +193,10 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
         if kwargs.get(bad):
             raise InvalidInputError(f"{bad}=True is not supported over a cluster (the fields stay on the workers); "
                                     "call fft_permittivity for the fields")
+    if n_chunks is not None and (isinstance(n_chunks, bool) or not isinstance(n_chunks, (int, np.integer))
+                                 or n_chunks < 1):
+        raise InvalidInputError(f"n_chunks must be a positive whole number of tasks (or None: one per worker), "
+                                f"got {n_chunks!r}")
     arr, _ = _as_label_array(labels)
     compact, values, _ = _compact_labels(arr)
     table, scalar = _eps_table(values, eps, wavelength_nm)
