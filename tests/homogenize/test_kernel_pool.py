@@ -58,40 +58,11 @@ with kernels.threads(4):
 assert sorted(seen) == [(0, 2), (2, 4), (4, 6), (6, 8)], seen
 """
 
-SAME_BITS = """
-import numpy as np
-from nmmm.homogenize import geometries as G
-from nmmm.homogenize import kernels
-from nmmm.homogenize.green import green_operator
-from nmmm.homogenize.solvers import Problem
-shape = (40, 36, 32)
-n = int(np.prod(shape))
-lab = G.boolean_spheres(40, 0.3, 4.0, ndim=3, seed=1)[:, :36, :32].reshape(-1).astype(np.uint8)
-tab = np.array([2.25, -50 + 5j], np.complex64)
-prob = Problem(lab.reshape(shape), 2, green_operator(shape, "willot2015"), np.complex64, 1)
-kind, ph, ih = prob.stencil
-def run(w):
-    rng = np.random.default_rng(0)
-    p, q, r, x, F = [(rng.normal(size=(3, n)) + 1j * rng.normal(size=(3, n))).astype(np.complex64) for _ in range(5)]
-    F = F.reshape((3,) + shape)
-    psi = np.zeros(shape, np.complex64)
-    sums = np.zeros(3, np.complex128)
-    e = np.zeros((3, n), np.complex64)
-    with kernels.threads(w):
-        pq = kernels.direction_and_eps(p, q, r, np.complex64(0.3 - 0.1j), lab, tab, True, sums)
-        rr = kernels.cocg_update(x, r, p, q, np.complex64(0.2 + 0.05j))
-        kernels.eps_times(e, x, lab, tab, np.array([1, 0, 0], np.complex64))
-        G1 = F.copy()
-        kernels.project(G1, prob._a, prob._b, prob._ny, prob._has_ny, 1)
-        kernels.potential(F, psi, prob._a, prob._b, ph)
-        Fg = np.empty_like(F)
-        kernels.stencil_gradient(psi, Fg, kind, ih)
-        rs = kernels.cocg_update_stencil(x, r, p, psi, np.complex64(0.1), kind, ih, True)
-    return [np.asarray(v) for v in (pq, sums, rr, p, q, r, x, e, G1, psi, Fg, rs)]
-ref = run(1)
-for w in (2, 3, 4):
-    for a, b in zip(run(w), ref):
-        assert np.array_equal(a, b), w
+SAME_BITS = f"""
+import sys
+sys.path.insert(0, {os.path.dirname(os.path.abspath(__file__))!r})
+import test_threads_kernels
+test_threads_kernels.test_each_kernel_gives_the_same_bits_at_every_thread_count()  # 1..4 threads here
 """
 
 
