@@ -1,6 +1,5 @@
 """Spectral batches on Dask: the chunked spectrum equals the one-process spectrum."""
 
-import logging
 
 import numpy as np
 import pytest
@@ -10,16 +9,6 @@ from nmmm.homogenize import fft_permittivity, fft_permittivity_spectrum
 from nmmm.homogenize import geometries as G
 
 distributed = pytest.importorskip("dask.distributed")
-
-
-@pytest.fixture(scope="module")
-def client():
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                       dashboard_address=None, silence_logs=logging.ERROR)
-    c = distributed.Client(cluster)
-    yield c
-    c.close()
-    cluster.close()
 
 
 def test_chunks_reproduce_the_serial_spectrum(client):

@@ -7,7 +7,6 @@
 - A per-wavelength spectrum cut inside a loading equals the one-process spectrum.
 """
 
-import logging
 import sys
 import warnings
 from pathlib import Path
@@ -95,17 +94,6 @@ def test_plan_gives_lanczos_loadings_whole_with_more_tasks_than_loadings(n_dirs,
     Lanczos runs in one task, each as long as its slowest wavelength)."""
     pieces = _plan(np.linspace(5, 2, 8), n_dirs, k, whole_loadings=True)
     assert pieces == [[(0, 8, (c,))] for c in range(n_dirs)]
-
-
-@pytest.fixture(scope="module")
-def client():
-    distributed = pytest.importorskip("dask.distributed")
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                       dashboard_address=None, silence_logs=logging.ERROR)
-    c = distributed.Client(cluster)
-    yield c
-    c.close()
-    cluster.close()
 
 
 def test_per_wavelength_spectrum_cut_inside_a_loading_equals_one_process(client):
