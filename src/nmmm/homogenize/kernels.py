@@ -44,8 +44,8 @@ import numba
 import numpy as np
 from numba import njit
 
-#: Voxels below which a field is processed by the calling thread alone (a hand-off to the pool
-#: costs ~20-50 µs, more on a loaded machine).
+#: Values (``field.size``: d × voxels for a vector field) below which a field is processed by the
+#: calling thread alone (a hand-off to the pool costs ~20-50 µs, more on a loaded machine).
 SERIAL_BELOW = 1 << 17
 CHUNK = 1 << 15  # voxels per reduction chunk of the flat (d, N) kernels (contiguous runs per component)
 
