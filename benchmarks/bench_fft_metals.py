@@ -26,8 +26,8 @@ affected by the load.
 
 What the default path does (issue 22): ``green=None`` takes willot2014 and complex128 for a 3-D cell
 with a low-loss metal (reported); a COCG whose residual, extrapolated from the last half of its
-history, would need more than 5 × maxiter projections is stopped from 150 projections on
-(``fft.PREDICT``) and COCG with the other Willot operator takes over (reported with the projections
+history, would need more than 5 × maxiter projections is stopped from 0.6 × maxiter (at least 150)
+projections on (``fft.PREDICT``; the 128³ rows below were measured with checks from 150 on) and COCG with the other Willot operator takes over (reported with the projections
 run, the residual reached and the prediction); BiCGStab/GMRES are not tried after such a stop (they
 measured worse there, below). Over several wavelengths a two-phase cell without a low-loss metal is
 solved by one Lanczos run per loading when estimated cheaper (``method="auto"``, reported).

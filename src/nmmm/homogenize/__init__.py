@@ -51,9 +51,10 @@ Known limitations
   near-singular (the count grows as 1/|Im s|, s = ε_h/(ε_m − ε_h)). On 128³, x loading, complex128
   COCG: −50 + 5i does not reach tol 1e-5 in 500 projections with either Willot operator (best
   5.2e-5), −50 + 2i needs 1346 with ``willot2014`` (the Lanczos counts quoted before, 1505 and
-  ≈ 3000 at −50 + 1i, overstate COCG's), and at −50 + 1i COCG is stopped after 150 projections
-  as predicted never to converge; every such stop is in ``switches`` and the ConvergenceError
-  gives the maxiter the prediction asks for. At 64³ all twelve metal cases of
+  ≈ 3000 at −50 + 1i, overstate COCG's), and at −50 + 1i COCG was stopped after 150 projections
+  (maxiter 500) with no decrease of its residual yet — the check now starts at 0.6 × maxiter
+  (``fft.PREDICT``: from 150 on it also stopped solves that converge within maxiter); every
+  such stop is in ``switches`` and the ConvergenceError gives the maxiter the prediction asks for. At 64³ all twelve metal cases of
   benchmarks/bench_fft_metals.py converge within 500 (flakes at −50 + 1i: 498). Real aluminium
   in the visible (Im ε ≥ 0.19 |ε|, |Im s| ≥ 0.013) is far from this: 118-216 projections per wavelength (x, y).
 - Lanczos (``method="lanczos"``, chosen by ``"auto"`` for two-phase spectra when cheaper) drifts

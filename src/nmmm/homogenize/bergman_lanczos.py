@@ -70,7 +70,8 @@ def two_phase_spectrum(labels, eps, *, green: str = "willot2015", directions=Non
     stop_when_slow : bool
         Stop a run early (ConvergenceError) when the slowest wavelength's residual, extrapolated
         (:func:`nmmm.homogenize.fft.predicted_projections`), would need more than
-        ``PREDICT[1]`` × ``maxiter`` steps (:data:`nmmm.homogenize.fft.PREDICT`).
+        ``PREDICT[1]`` × ``maxiter`` steps (:data:`nmmm.homogenize.fft.PREDICT`), checked from
+        :func:`nmmm.homogenize.fft.first_prediction` steps on.
 
     Returns
     -------
@@ -134,7 +135,7 @@ def lanczos_columns(compact, counts, table, op, dirs, tol, maxiter, workers=2, s
     from scipy.linalg import solve_banded
 
     from nmmm.errors import ConvergenceError
-    from nmmm.homogenize.fft import PREDICT, predicted_projections
+    from nmmm.homogenize.fft import PREDICT, first_prediction, predicted_projections
     from nmmm.homogenize.kernels import threads
     from nmmm.homogenize.solvers import Problem
 
@@ -211,11 +212,12 @@ def lanczos_columns(compact, counts, table, op, dirs, tol, maxiter, workers=2, s
                     done_at[done_at == 0] = k
                     break
                 open_ = np.flatnonzero(done_at == 0)
-                if stop_when_slow and open_.size and k >= PREDICT[0] and k % 25 == 0:
+                if stop_when_slow and open_.size and k >= first_prediction(maxiter) and k % 25 == 0:
                     pred = max(predicted_projections(hist[i], tol) for i in open_)
                     if pred > PREDICT[1] * maxiter:
                         worst = int(open_[np.argmax(res[open_])])
-                        when = "never (no decrease)" if not np.isfinite(pred) else f"after ~{pred:.0f} steps"
+                        when = (f"never at its recent rate (no decrease over the last {k // 2} steps)"
+                                if not np.isfinite(pred) else f"after ~{pred:.0f} steps")
                         raise ConvergenceError(
                             f"Lanczos predicted slow for loading e{j}: {open_.size} wavelength(s) above tol={tol:g} "
                             f"after {k} steps (worst relative residual {res[worst]:.3g} at index {worst}) would "
