@@ -231,6 +231,9 @@ def test_cli_method_and_spectrum(tmp_path, capsys):
 
 @pytest.mark.parametrize("args,word", [(["--eps", "1=-50+2j", "--method", "bergman"], "--method"),
                                        (["--eps", "1=-50+2j", "--wavelengths", "600:400:10"], "--wavelengths"),
+                                       (["--eps", "1=-50+2j", "--wavelengths", "380:inf:5"], "--wavelengths"),
+                                       (["--eps", "1=-50+2j", "--wavelengths", "0:1e308:1e-308"], "--wavelengths"),
+                                       (["--eps", "1=-50+2j", "--wavelengths", "380:780:1e-9"], "larger step"),
                                        (["--eps", "1=main/Al/Rakic"], "--wavelengths"),
                                        (["--eps", "1=nope/none", "--wavelengths", "500"], "nope/none")])
 def test_cli_refuses_bad_values_in_one_line(tmp_path, capsys, args, word):

@@ -41,22 +41,30 @@ def _parse_eps(items) -> dict:
     return out
 
 
+#: The most wavelengths ``--wavelengths start:stop:step`` may make (a step typed too small).
+MAX_WAVELENGTHS = 100_000
+
+
 def _parse_wavelengths(text):
-    """'380:780:5' (start:stop:step, inclusive, nm) or '450,550,650'."""
+    """'380:780:5' (start:stop:step, inclusive, nm; finite, at most :data:`MAX_WAVELENGTHS`) or
+    '450,550,650'."""
     if text is None:
         return None
     try:
         if ":" in text:
             a, b, c = (float(x) for x in text.split(":"))
-            if not c > 0 or b < a:
+            if not (np.isfinite([a, b, c]).all() and c > 0 and b >= a):
                 raise ValueError
             n = int(round((b - a) / c)) + 1
+            if n > MAX_WAVELENGTHS:
+                raise click.BadParameter(f"--wavelengths {text!r} makes {n} wavelengths, more than "
+                                         f"{MAX_WAVELENGTHS}; give a larger step")
             return np.linspace(a, a + (n - 1) * c, n)
         out = np.array([float(x) for x in text.split(",") if x.strip()])
         if out.size == 0:
             raise ValueError
         return out
-    except ValueError:
+    except (ValueError, OverflowError):
         raise click.BadParameter(f"--wavelengths: give 'start:stop:step' (nm, step > 0) or comma-separated "
                                  f"numbers, got {text!r}") from None
 
