@@ -259,3 +259,11 @@ def test_reaching_maxiter_while_converging_does_not_try_bicgstab():
     assert set(exc.value.history) == {"cocg"}
     assert "maxiter ≈" in str(exc.value)  # the error says how many projections the prediction asks for
 
+
+
+def test_lanczos_memory_is_estimated_at_complex128():
+    """One Lanczos run uses complex128 buffers whatever dtype was asked: the refusal before a run
+    must not estimate it at complex64's half size."""
+    e64 = estimate_fft_work((64, 64, 64), n_wavelengths=81, dtype="complex64", method="lanczos")
+    e128 = estimate_fft_work((64, 64, 64), n_wavelengths=81, dtype="complex128", method="lanczos")
+    assert e64["memory_gb"] == e128["memory_gb"] == estimate_fft_work((64, 64, 64), dtype="complex128")["memory_gb"]
