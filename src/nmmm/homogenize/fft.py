@@ -53,11 +53,14 @@ class FFTHomogenization:
         only the loadings in ``directions`` are computed (other columns are NaN).
     iterations : ndarray of int
         Projections (applications of Γ, 2d FFTs each) per loading, shape ``(d_loads,)`` or
-        ``(n_wavelengths, d_loads)``.
+        ``(n_wavelengths, d_loads)``. For ``metadata["method"] == "lanczos"``: the Lanczos step at
+        which each wavelength converged (the run of a loading costs its slowest wavelength's:
+        ``metadata["projections"]`` per loading).
     residual_history : list
         Relative residual histories ‖r‖/‖b‖ per wavelength and loading (nested lists).
     solver : ndarray of str
-        Solver that produced each entry (``"cocg"`` unless a fallback was used).
+        Solver that produced each entry (``"cocg"`` unless a fallback was used; ``"lanczos"``
+        for a spectrum solved by one Lanczos run per loading).
     green : str
         Green operator used.
     fractions : dict
@@ -69,7 +72,10 @@ class FFTHomogenization:
         Every automatic choice or switch the solve made, in order: the Green operator chosen for
         ``green=None`` (``{"what": "green", "from": ..., "to": ..., "reason": ...}``) and each
         fallback after a failed solve (``"what": "green"`` or ``"solver"``, with
-        ``"wavelength_index"`` and ``"loading"``). Empty when nothing was switched.
+        ``"wavelength_index"``, ``"loading"``, and the failed attempt's ``"projections"``,
+        ``"residual_reached"`` and ``"predicted_projections"``), complex64 promoted to complex128
+        (``"what": "dtype"``), the spectrum method taken by ``method="auto"`` (``"what": "method"``).
+        Empty when nothing was switched.
     """
 
     tensor: np.ndarray
