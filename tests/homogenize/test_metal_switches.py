@@ -267,3 +267,23 @@ def test_lanczos_memory_is_estimated_at_complex128():
     e64 = estimate_fft_work((64, 64, 64), n_wavelengths=81, dtype="complex64", method="lanczos")
     e128 = estimate_fft_work((64, 64, 64), n_wavelengths=81, dtype="complex128", method="lanczos")
     assert e64["memory_gb"] == e128["memory_gb"] == estimate_fft_work((64, 64, 64), dtype="complex128")["memory_gb"]
+
+
+def test_auto_lanczos_that_misses_maxiter_hands_over_to_per_wavelength():
+    """Lanczos takes a few % more steps than COCG (finite precision): with a maxiter that
+    per-wavelength COCG meets, the Lanczos run "auto" chose stops short; the per-wavelength solves
+    then give the result, reported as a second method switch. method="lanczos" asked still raises."""
+    lab = G.boolean_spheres(16, 0.2, 2.5, ndim=3, seed=4)
+    nw = 6
+    eps = {0: 2.25, 1: (-50 + 8j) * np.linspace(1, 1.05, nw)}
+    kw = dict(wavelength_nm=np.linspace(400, 700, nw), directions=[0], workers=1, tol=1e-6, progress=False)
+    ref = fft_permittivity(lab, eps, method="per_wavelength", **kw)
+    m = int(ref.iterations.max())
+    with pytest.raises(ConvergenceError, match="Lanczos"):
+        fft_permittivity(lab, eps, method="lanczos", maxiter=m, **kw)
+    with pytest.warns(RuntimeWarning, match="solving per wavelength"):
+        r = fft_permittivity(lab, eps, method="auto", maxiter=m, **kw)
+    assert r.metadata["method"] == "per_wavelength" and "did not converge" in r.metadata["method_reason"]
+    methods = [(sw["from"], sw["to"]) for sw in r.switches if sw["what"] == "method"]
+    assert methods == [("per_wavelength", "lanczos"), ("lanczos", "per_wavelength")]
+    np.testing.assert_allclose(r.tensor, ref.tensor, rtol=0, atol=1e-12)
