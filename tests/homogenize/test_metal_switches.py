@@ -287,3 +287,19 @@ def test_auto_lanczos_that_misses_maxiter_hands_over_to_per_wavelength():
     methods = [(sw["from"], sw["to"]) for sw in r.switches if sw["what"] == "method"]
     assert methods == [("per_wavelength", "lanczos"), ("lanczos", "per_wavelength")]
     np.testing.assert_allclose(r.tensor, ref.tensor, rtol=0, atol=1e-12)
+
+
+def test_cli_json_switches_are_strict_json():
+    """A stopped solve's predicted_projections may be inf: --json writes it as a string, not the
+    non-standard Infinity that strict JSON readers refuse."""
+    from nmmm.homogenize.cli import _switch_json
+
+    sw = {"what": "green", "from": "cocg/willot2015", "to": "cocg/willot2014", "reason": "predicted slow",
+          "projections": 375, "residual_reached": 0.1, "predicted_projections": float("inf"), "loading": 0}
+    text = json.dumps(_switch_json(sw))
+
+    def refuse(name):
+        raise ValueError(name)
+
+    back = json.loads(text, parse_constant=refuse)
+    assert back["predicted_projections"] == "inf" and back["projections"] == 375 and back["residual_reached"] == 0.1

@@ -69,6 +69,18 @@ def _parse_wavelengths(text):
                                  f"numbers, got {text!r}") from None
 
 
+def _switch_json(sw: dict) -> dict:
+    """A switch as strict JSON: numbers stay numbers, a non-finite one (a stopped solve's
+    predicted_projections = inf) and anything else become strings (json.dumps would write the
+    non-standard Infinity)."""
+    def value(v):
+        if isinstance(v, (str, bool, int)) or (isinstance(v, float) and np.isfinite(v)):
+            return v
+        return str(v)
+
+    return {k: value(v) for k, v in sw.items()}
+
+
 @click.group()
 def homogenize():
     """FFT homogenization: effective permittivity of periodic microstructures."""
@@ -120,8 +132,7 @@ def run(cell, eps_items, wavelengths, green, solver, method, tol, maxiter, singl
             "tensor": [[[[z.real, z.imag] for z in row] for row in t] for t in tensors] if spectrum
             else [[[z.real, z.imag] for z in row] for row in tensors],
             "iterations": np.asarray(r.iterations).tolist(), "fractions": r.fractions, "green": r.green,
-            "method": r.metadata.get("method"), "switches": [
-                {k: (v if isinstance(v, (str, int, float)) else str(v)) for k, v in sw.items()} for sw in r.switches],
+            "method": r.metadata.get("method"), "switches": [_switch_json(sw) for sw in r.switches],
         }
         if spectrum and wl is not None:
             out["wavelength_nm"] = np.asarray(wl).tolist()
