@@ -29,6 +29,12 @@ References
   doubling, Fourier decomposition in azimuth.
 - J. W. Hovenier, C. van der Mee, H. Domke, *Transfer of Polarized Light in Planetary
   Atmospheres*, Kluwer (2004) §6.3 — azimuthal Fourier modes in the adding method.
+- S. A. Prahl, "The adding-doubling method", in A. J. Welch, M. J. C. van Gemert (eds.),
+  *Optical-Thermal Response of Laser-Irradiated Tissue*, Plenum (1995) 101–129,
+  doi:10.1007/978-1-4757-6092-7_5 — the polar quadrature split at the critical angle
+  (:func:`gauss_nodes`).
+- C. Kulla, A. Conty, "Revisiting physically based shading at Imageworks", SIGGRAPH 2017
+  course *Physically Based Shading in Theory and Practice* — the separable lobe f_KC.
 """
 
 from __future__ import annotations
