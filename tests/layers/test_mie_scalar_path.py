@@ -31,6 +31,22 @@ def test_fast_path_equals_general_path(args):
         assert isinstance(a, np.float64) and a == b, f.name
 
 
+def test_fast_path_equals_general_path_bit_for_bit_in_any_medium():
+    """n_medium != 1 and every kind of plain number: m = n / n_medium was a Numba complex division
+    in the fast path and a NumPy one in the general path, 1 ulp apart in 44 % of cases (e.g. the
+    first case: Q_ext 4.4e-16 apart)."""
+    rng = np.random.default_rng(3)
+    cases = [(2.2838449706104615 + 2.1961446592915324j, 1.33, 1851.0, 468.0)]
+    for _ in range(150):
+        n = complex(rng.uniform(0.2, 3.0), rng.choice([0.0, rng.uniform(0, 4)]))
+        cases.append((n, float(rng.uniform(1.0, 1.8)), float(10 ** rng.uniform(0.5, 3.8)), float(rng.uniform(350, 850))))
+    cases += [(np.complex64(1.7 + 0.3j), np.float32(1.41), np.int64(700), 512), (1.6 + 0j, np.float64(1.52), 250, 600.0)]
+    for args in cases:
+        fast, ref = M.mie(*args), _general(*args)
+        for name in ("qext", "qsca", "qabs", "qback", "g", "size_parameter"):
+            assert getattr(fast, name) == getattr(ref, name), (args, name)
+
+
 def test_size_parameter_limit_is_read_at_call_time(monkeypatch):
     assert float(M.mie(1.5, 1.0, 500.0, 550.0).size_parameter) > 2
     monkeypatch.setattr(M, "MIE_MAX_SIZE_PARAMETER", 2.0)

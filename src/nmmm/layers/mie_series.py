@@ -387,7 +387,8 @@ def _mie_single(n_particle, n_medium, diameter_nm, wavelength_nm, max_size_param
     x = math.pi * diameter_nm * n_medium / wavelength_nm
     if not x <= max_size_parameter:
         return False, 0.0, 0.0, 0.0, 0.0, x
-    m = n_particle / n_medium
+    s = 1.0 / n_medium  # m = n * (1 / n_medium) component by component, as _mie_layers forms it: the same bits
+    m = complex(n_particle.real * s, n_particle.imag * s)
     az = abs(m * x)
     D = np.empty(max(72, int(max(_n_terms(x), az) + 4.0 * az ** (1.0 / 3.0)) + 12), dtype=np.complex128)
     qext, qsca, qback, g = _one_sphere(m, x, D)
