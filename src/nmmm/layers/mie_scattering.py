@@ -53,7 +53,8 @@ from numpy.typing import ArrayLike
 
 from nmmm.errors import InvalidInputError
 from nmmm.layers.fresnel_equations import medium_nk
-from nmmm.layers.mie_series import SMALL_X, _mie_batch, _mie_batch_serial, _mie_single  # noqa: F401  (SMALL_X: tests)
+from nmmm.layers.mie_series import (  # noqa: F401  (SMALL_X: tests)
+    MIN_SIZE_PARAMETER, SMALL_X, _mie_batch, _mie_batch_serial, _mie_single)
 from nmmm.spectra import as_wavelength_nm, check_finite, check_positive
 
 __all__ = ["MieResult", "mie", "mie_coated", "mie_multilayer"]
@@ -317,6 +318,8 @@ def mie_multilayer(n_layers: ArrayLike, n_medium: ArrayLike, diameters_nm: Array
     return _mie_layers(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg, names)
 
 
+#: smallest size parameter of an inner layer (core or inner shell) accepted: its recursion underflows below ~1e-155
+MIN_INNER_SIZE_PARAMETER = 1.0e-150
 #: largest size parameter x = pi d n_medium / lambda accepted (the series needs ~x terms; x = 1e6 is a
 #: 120 µm sphere in the visible, already a geometric-optics particle, which nmmm does not model)
 MIE_MAX_SIZE_PARAMETER = 1.0e6
@@ -373,10 +376,23 @@ def _mie_layers(n_layers, n_medium, diameters_nm, wavelength_nm, angles_deg, nam
     m = np.empty((wb.size, L), dtype=complex)
     x = np.empty((wb.size, L))
     for l in range(L):
+        x[:, l] = np.pi * np.broadcast_to(ds[l], shape).ravel() * nmb / wb
+    # the outer size parameter: the efficiencies divide by it; an inner layer's may be smaller (the tests
+    # check cores at x = 3e-9), down to where its recursion underflows (a core below ~1e-155: a
+    # ZeroDivisionError in the kernel), far below any real core
+    floor = np.full(L, MIN_INNER_SIZE_PARAMETER)
+    floor[-1] = MIN_SIZE_PARAMETER
+    if x.size and not np.all(x >= floor):
+        k, l = divmod(int(np.argmin(x >= floor)), L)
+        raise InvalidInputError(
+            f"size parameter x = pi d n_medium / lambda is {float(x[k, l]):.3g} (diameter "
+            f"{float(np.broadcast_to(ds[l], shape).ravel()[k]):.3g} nm, n_medium {float(nmb[k]):.3g}, wavelength "
+            f"{float(wb[k]):.4g} nm), below {floor[l]:.0e}: a {'particle' if l == L - 1 else 'core'} far smaller than an "
+            "atom, where the series underflows; give the diameters and the wavelength in nm (1 µm = 1000 nm)")
+    for l in range(L):
         # n * (1 / n_medium): exact component by component, as the one-sphere fast path forms it in Numba (a
         # complex division rounds differently in NumPy and in Numba, 1 ulp in 44 % of cases)
         m[:, l] = np.broadcast_to(idx[l], shape).ravel() * (1.0 / nmb)
-        x[:, l] = np.pi * np.broadcast_to(ds[l], shape).ravel() * nmb / wb
     if L > 1 and np.any(np.diff(x, axis=1) <= 0):
         raise InvalidInputError("layer diameters must increase strictly from the core outwards")
     return _run(m, x, shape, _angles(angles_deg), ds[-1], w, nm)

@@ -373,11 +373,17 @@ def _serial_copy(fn):
 #: pool costs ~10 µs on an idle machine and up to ~10 ms on a loaded one (issue 22).
 _mie_batch_serial = numba.njit(cache=True)(_serial_copy(_mie_batch.py_func))
 
+#: smallest size parameter the series is evaluated at: the small-x form is checked to 1e-10 against
+#: 60-digit mpmath down to x = 1e-8 (tests/layers/test_mie_small_x.py); far below, x² underflows and the
+#: efficiencies divide by zero. x = 1e-8 is a 2e-6 nm sphere in the visible, far below an atom.
+MIN_SIZE_PARAMETER = 1.0e-8
+
+
 @numba.njit(cache=True)
 def _mie_single(n_particle, n_medium, diameter_nm, wavelength_nm, max_size_parameter):
     """One homogeneous sphere without amplitudes, from plain numbers: (ok, Q_ext, Q_sca, Q_back, g, x)
     by :func:`_one_sphere`; ok is False (and nothing computed) unless every argument is finite,
-    n_medium, the diameter, the wavelength and n > 0, k >= 0 and x <= ``max_size_parameter``: the
+    n_medium, the diameter, the wavelength and n > 0, k >= 0 and MIN_SIZE_PARAMETER <= x <= ``max_size_parameter``: the
     general path then refuses the call and says why."""
     inf = np.inf
     # comparisons are False for NaN; the upper bounds exclude infinity
@@ -385,7 +391,7 @@ def _mie_single(n_particle, n_medium, diameter_nm, wavelength_nm, max_size_param
             and 0.0 < n_particle.real < inf and 0.0 <= n_particle.imag < inf):
         return False, 0.0, 0.0, 0.0, 0.0, 0.0
     x = math.pi * diameter_nm * n_medium / wavelength_nm
-    if not x <= max_size_parameter:
+    if not MIN_SIZE_PARAMETER <= x <= max_size_parameter:
         return False, 0.0, 0.0, 0.0, 0.0, x
     s = 1.0 / n_medium  # m = n * (1 / n_medium) component by component, as _mie_layers forms it: the same bits
     m = complex(n_particle.real * s, n_particle.imag * s)
