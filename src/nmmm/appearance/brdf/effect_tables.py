@@ -28,7 +28,7 @@ from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
 from nmmm.appearance.brdf.coat_transport import coat_transport
 from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
 from nmmm.appearance.brdf.interpolation import _NA, _deg, _hemi_mean, _lerp1, _lerp_table
-from nmmm.appearance.brdf.ms_azimuth import _lobe_sum_nb, _node_weights, lobe_factor
+from nmmm.appearance.brdf.ms_azimuth import _CHUNK_PAIRS, _lobe_at_wavelengths_nb, _node_runs, _node_weights, lobe_factor
 from nmmm.appearance.brdf.tables import _Tables
 from nmmm.appearance.flakes import refract_in
 
@@ -157,9 +157,8 @@ class _EffectTables(_Tables):
                        self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
                        np.ascontiguousarray(self.tau_e, float), kap * self.dz, self._Qd, self._Qz, self._Qb,
                        self._s2_step, bool(self.tau_e_const), self.z0, self.dz, np.ascontiguousarray(kb, float),
-                       self.Dms, Kms, C,
-                       lk.astype(np.int64), lw.astype(float), "specular" in comps,
-                       "flakes" in comps and self.has_flakes, do_ms)
+                       np.ascontiguousarray(self.Dms), Kms, C, _node_runs(lk, C.shape[2]), lw.astype(float),
+                       "specular" in comps, "flakes" in comps and self.has_flakes, do_ms, _CHUNK_PAIRS)
 
     def evaluate(self, wi, wo, comps):
         P, L = wi.shape[0], self.L
@@ -216,7 +215,7 @@ def _pos(c, step, n_nodes):
 
 
 def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kd, Qd, Qz, Qb,
-                      s2_step, tau_e_const, z0, dz, kb, Dms, Kms, C, lk, lw, do_spec, do_flakes, do_ms):
+                      s2_step, tau_e_const, z0, dz, kb, Dms, Kms, C, seg, lw, do_spec, do_flakes, do_ms, chunk):
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
@@ -226,99 +225,95 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
     K = C.shape[2]
     NS2 = Qd.shape[0]
     inv_n2 = 1.0 / (n * n)
-    for p in _prange(P):
-        ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
-        ox, oy, oz = wo[p, 0], wo[p, 1], wo[p, 2]
-        if iz <= 0.0 or oz <= 0.0:
-            for l in range(L):
-                out[p, l] = 0.0
-            continue
-        i0, fi = _pos_nb(iz, step, NT)
-        o0, fo = _pos_nb(oz, step, NT)
-        ai0, fai = _pos_nb(iz, astep, NA)
-        ao0, fao = _pos_nb(oz, astep, NA)
-        spec_w = 0.0
-        d0 = 0
-        fd = 0.0
-        if do_spec and alpha > 0.0:
-            hx, hy, hz = ix + ox, iy + oy, iz + oz
-            hn = np.sqrt(hx * hx + hy * hy + hz * hz)
-            hx /= hn
-            hy /= hn
-            hz /= hn
-            a2 = alpha * alpha
-            dd = hz * hz * (a2 - 1.0) + 1.0
-            ti2 = (1.0 - iz * iz) / (iz * iz)
-            to2 = (1.0 - oz * oz) / (oz * oz)
-            G = 4.0 / ((1.0 + np.sqrt(1.0 + a2 * ti2)) * (1.0 + np.sqrt(1.0 + a2 * to2)))
-            spec_w = a2 / (np.pi * dd * dd) * G / (4.0 * iz * oz)
-            d0, fd = _pos_nb(ix * hx + iy * hy + iz * hz, step, NT)
-        ipx, ipy = ix / n, iy / n
-        ipz = np.sqrt(max(1.0 - ipx * ipx - ipy * ipy, 0.0))
-        opx, opy = ox / n, oy / n
-        opz = np.sqrt(max(1.0 - opx * opx - opy * opy, 0.0))
-        S2 = 1.0 / ipz + 1.0 / opz
-        S = 0.0
-        g = 0.0
-        c0 = 0
-        fc = 0.0
-        if tau > 0.0:
-            k0, fa = _pos_nb(ipz, step, NT)
-            a_i = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
-            k0, fa = _pos_nb(opz, step, NT)
-            a_o = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
-            S = a_i / ipz + a_o / opz
-            if do_flakes:
-                hx, hy, hz = ipx + opx, ipy + opy, ipz + opz
+    n_chunks = (P + chunk - 1) // chunk
+    for ch in _prange(n_chunks):  # chunks of pairs: per-chunk buffers of the lobe sums
+        sk = np.empty(K + C.shape[3])
+        sl = np.zeros(L)
+        for p in range(ch * chunk, min(P, (ch + 1) * chunk)):
+            ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
+            ox, oy, oz = wo[p, 0], wo[p, 1], wo[p, 2]
+            if iz <= 0.0 or oz <= 0.0:
+                for l in range(L):
+                    out[p, l] = 0.0
+                continue
+            i0, fi = _pos_nb(iz, step, NT)
+            o0, fo = _pos_nb(oz, step, NT)
+            ai0, fai = _pos_nb(iz, astep, NA)
+            ao0, fao = _pos_nb(oz, astep, NA)
+            spec_w = 0.0
+            d0 = 0
+            fd = 0.0
+            if do_spec and alpha > 0.0:
+                hx, hy, hz = ix + ox, iy + oy, iz + oz
                 hn = np.sqrt(hx * hx + hy * hy + hz * hz)
+                hx /= hn
+                hy /= hn
                 hz /= hn
-                t0, ft = _pos_nb(hz, dstep, ND)
-                g = tau * (den[t0] * (1.0 - ft) + den[t0 + 1] * ft) / (4.0 * ipz * opz)
-                c0, fc = _pos_nb((ipx * hx + ipy * hy) / hn + ipz * hz, step, NT)
-        cphi = 2.0  # > 1: no azimuth (a direction along the normal)
-        if M > 0:
-            ri = np.sqrt(ix * ix + iy * iy)
-            ro = np.sqrt(ox * ox + oy * oy)
-            if ri > 1e-9 and ro > 1e-9:
-                cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-        has_z0 = z0 > 0.0
-        has_below = dz < 1.0
-        xs = min(max((S2 - 2.0) / s2_step, 0.0), NS2 - 1.000001)
-        js = int(xs)
-        fs = xs - js
-        e_t0 = np.exp(-tau_e[0] * S)
-        # the lobe's polar shape c_0 and azimuthal modes at the wavelength nodes (1 + s multiplies
-        # the separable lobe), linear in λ between; lk is non-decreasing: each node's sum once
-        kcur = -1
-        s_lo = 0.0
-        s_hi = 0.0
-        for l in range(L):  # few branches, all the same for every l
-            sl = 0.0
+                a2 = alpha * alpha
+                dd = hz * hz * (a2 - 1.0) + 1.0
+                ti2 = (1.0 - iz * iz) / (iz * iz)
+                to2 = (1.0 - oz * oz) / (oz * oz)
+                G = 4.0 / ((1.0 + np.sqrt(1.0 + a2 * ti2)) * (1.0 + np.sqrt(1.0 + a2 * to2)))
+                spec_w = a2 / (np.pi * dd * dd) * G / (4.0 * iz * oz)
+                d0, fd = _pos_nb(ix * hx + iy * hy + iz * hz, step, NT)
+            ipx, ipy = ix / n, iy / n
+            ipz = np.sqrt(max(1.0 - ipx * ipx - ipy * ipy, 0.0))
+            opx, opy = ox / n, oy / n
+            opz = np.sqrt(max(1.0 - opx * opx - opy * opy, 0.0))
+            S2 = 1.0 / ipz + 1.0 / opz
+            S = 0.0
+            g = 0.0
+            c0 = 0
+            fc = 0.0
+            if tau > 0.0:
+                k0, fa = _pos_nb(ipz, step, NT)
+                a_i = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
+                k0, fa = _pos_nb(opz, step, NT)
+                a_o = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
+                S = a_i / ipz + a_o / opz
+                if do_flakes:
+                    hx, hy, hz = ipx + opx, ipy + opy, ipz + opz
+                    hn = np.sqrt(hx * hx + hy * hy + hz * hz)
+                    hz /= hn
+                    t0, ft = _pos_nb(hz, dstep, ND)
+                    g = tau * (den[t0] * (1.0 - ft) + den[t0 + 1] * ft) / (4.0 * ipz * opz)
+                    c0, fc = _pos_nb((ipx * hx + ipy * hy) / hn + ipz * hz, step, NT)
+            cphi = 2.0  # > 1: no azimuth (a direction along the normal)
+            if M > 0:
+                ri = np.sqrt(ix * ix + iy * iy)
+                ro = np.sqrt(ox * ox + oy * oy)
+                if ri > 1e-9 and ro > 1e-9:
+                    cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
+            has_z0 = z0 > 0.0
+            has_below = dz < 1.0
+            xs = min(max((S2 - 2.0) / s2_step, 0.0), NS2 - 1.000001)
+            js = int(xs)
+            fs = xs - js
+            e_t0 = np.exp(-tau_e[0] * S)
+            # the lobe's polar shape c_0 and azimuthal modes at the wavelength nodes (1 + s multiplies
+            # the separable lobe), linear in λ between: sl, each node's sum once per pair
             if do_ms:
-                k = lk[l]
-                if k != kcur:
-                    s_lo = s_hi if kcur >= 0 and k == kcur + 1 else _lobe_sum_nb(C, k, ai0, fai, ao0, fao, cphi)
-                    s_hi = _lobe_sum_nb(C, min(k + 1, K - 1), ai0, fai, ao0, fao, cphi)
-                    kcur = k
-                sl = s_lo * (1.0 - lw[l]) + s_hi * lw[l]
-            x = tau_e[l] * S + kd[l] * S2
-            e = Qd[js, l] * (1.0 - fs) + Qd[js + 1, l] * fs
-            if tau_e_const:
-                e *= e_t0
-            else:
-                e *= np.exp(-tau_e[l] * S)
-            fl = g * (1.0 - e) / (x + 1e-300) * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
-            if has_z0:
-                fl *= Qz[js, l] * (1.0 - fs) + Qz[js + 1, l] * fs
-            eb = e * kb[l]
-            if has_below:
-                eb *= Qb[js, l] * (1.0 - fs) + Qb[js + 1, l] * fs
-            val = ((Tc[i0, l] * (1.0 - fi) + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo)
-                   * inv_n2 * (fl + eb))
-            val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
-            val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
-                    * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l] * (1.0 + sl))
-            out[p, l] = val
+                _lobe_at_wavelengths_nb(C, ai0, fai, ao0, fao, cphi, seg, lw, sk, sl)
+            o = out[p]
+            for l in range(L):  # few branches, all the same for every l
+                x = tau_e[l] * S + kd[l] * S2
+                e = Qd[js, l] * (1.0 - fs) + Qd[js + 1, l] * fs
+                if tau_e_const:
+                    e *= e_t0
+                else:
+                    e *= np.exp(-tau_e[l] * S)
+                fl = g * (1.0 - e) / (x + 1e-300) * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
+                if has_z0:
+                    fl *= Qz[js, l] * (1.0 - fs) + Qz[js + 1, l] * fs
+                eb = e * kb[l]
+                if has_below:
+                    eb *= Qb[js, l] * (1.0 - fs) + Qb[js + 1, l] * fs
+                val = ((Tc[i0, l] * (1.0 - fi) + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo)
+                       * inv_n2 * (fl + eb))
+                val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
+                val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
+                        * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l] * (1.0 + sl[l]))
+                o[l] = val
 
 
 if _nb is not None:

@@ -50,6 +50,8 @@ except ImportError:  # pragma: no cover
 
 #: Fourier modes m = 1 … N_MODES of the multiple-scattering lobe
 N_MODES = 6
+#: pairs per parallel chunk of the kernels (per-chunk buffers of the lobe sums)
+_CHUNK_PAIRS = 256
 
 
 def gauss_nodes(n_mu: int = 48, n: float | None = None):
@@ -283,63 +285,88 @@ def lobe_tables(tab, F, sel, ms, ms_lossless, th, mu, dmu):
     tab._ms_nodes = sel.astype(np.int64)
 
 
-def _lobe_sum(C, k, ai0, fai, ao0, fao, cphi):
-    """c_0 + 2 Σ c_m cos(m φ) at wavelength node k (bilinear in θi, θo; cphi > 1: no azimuth)."""
+def _lobe_at_wavelengths(C, ai0, fai, ao0, fao, cphi, seg, lw, sk, sl):
+    """sl[l] = s = c_0 + 2 Σ c_m cos(m φ) (≥ −1) at each wavelength, linear in λ between the
+    node sums sk[k] (bilinear in θi, θo; cphi > 1: no azimuth). Per pair: cos(m φ) once by the
+    Chebyshev recursion, each node's sum once (sk: K node sums, then M cosines), then the
+    wavelengths between nodes k and k + 1, ``seg[k] … seg[k + 1]`` (:func:`_node_runs`), in one
+    branch-free loop per run. The kernels' wavelength loops that use sl have no branch either and
+    vectorise: the pass was 2× slower with the node sums inside the wavelength loop."""
+    K = C.shape[2]
+    M1 = C.shape[3]
     w00 = (1.0 - fai) * (1.0 - fao)
     w01 = (1.0 - fai) * fao
     w10 = fai * (1.0 - fao)
     w11 = fai * fao
-    s = C[ai0, ao0, k, 0] * w00 + C[ai0, ao0 + 1, k, 0] * w01 + C[ai0 + 1, ao0, k, 0] * w10 + C[ai0 + 1, ao0 + 1, k, 0] * w11
-    if cphi <= 1.0:
-        c_prev, c_cur = 1.0, cphi
-        for m in range(1, C.shape[3]):  # cos(m φ) by the Chebyshev recursion
-            s += 2.0 * c_cur * (C[ai0, ao0, k, m] * w00 + C[ai0, ao0 + 1, k, m] * w01 + C[ai0 + 1, ao0, k, m] * w10
-                                + C[ai0 + 1, ao0 + 1, k, m] * w11)
-            c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
-    return max(s, -1.0)
+    c00 = C[ai0, ao0]
+    c01 = C[ai0, ao0 + 1]
+    c10 = C[ai0 + 1, ao0]
+    c11 = C[ai0 + 1, ao0 + 1]
+    cm = sk[K:]  # cos(m φ), m = 1 … M, by the Chebyshev recursion, once for all nodes
+    c_prev, c_cur = 1.0, cphi
+    for m in range(1, M1):
+        cm[m - 1] = c_cur
+        c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
+    for k in range(K):  # bilinear in θi, θo, node k; clipped at −1
+        s = c00[k, 0] * w00 + c01[k, 0] * w01 + c10[k, 0] * w10 + c11[k, 0] * w11
+        if cphi <= 1.0:
+            for m in range(1, M1):
+                s += 2.0 * cm[m - 1] * (c00[k, m] * w00 + c01[k, m] * w01 + c10[k, m] * w10 + c11[k, m] * w11)
+        sk[k] = max(s, -1.0)
+    for r in range(seg.shape[0] - 1):
+        s_lo = sk[r]
+        ds = (sk[r + 1] if r + 1 < K else s_lo) - s_lo
+        l0, l1 = seg[r], seg[r + 1]
+        sl_r = sl[l0:l1]  # on views the loop vectorises (indexed from l0 it does not)
+        lw_r = lw[l0:l1]
+        for j in range(l1 - l0):
+            sl_r[j] = s_lo + ds * lw_r[j]
 
 
-def _add_modes_py(wi, wo, out, Dms, Kms, C, seg_end, lw, astep):
+def _add_modes_py(wi, wo, out, Dms, Kms, C, seg, lw, astep, chunk):
     P = wi.shape[0]
+    L = out.shape[1]
     NA = Dms.shape[0]
     K = C.shape[2]
-    for p in _prange(P):
-        ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
-        ox, oy, oz = wo[p, 0], wo[p, 1], wo[p, 2]
-        if iz <= 0.0 or oz <= 0.0:
-            continue
-        ri = np.sqrt(ix * ix + iy * iy)
-        ro = np.sqrt(ox * ox + oy * oy)
-        cphi = 2.0
-        if ri > 1e-9 and ro > 1e-9:
-            cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-        xi = min(np.arccos(min(iz, 1.0)) * (180.0 / np.pi) / astep, NA - 1.000001)
-        a0 = int(xi)
-        fa = xi - a0
-        xo = min(np.arccos(min(oz, 1.0)) * (180.0 / np.pi) / astep, NA - 1.000001)
-        b0 = int(xo)
-        fb = xo - b0
-        # wavelengths in runs of one node interval (seg_end[k]: end of node k's run): loop-invariant
-        # node sums, a branch-free inner loop
-        l0 = 0
-        s_lo = _lobe_sum_nb(C, 0, a0, fa, b0, fb, cphi)
-        for k in range(seg_end.shape[0]):
-            s_hi = _lobe_sum_nb(C, k + 1, a0, fa, b0, fb, cphi) if k + 1 < K else s_lo
-            ds = s_hi - s_lo
-            for l in range(l0, seg_end[k]):
-                out[p, l] += (s_lo + ds * lw[l]) * ((Dms[a0, l] * (1.0 - fa) + Dms[a0 + 1, l] * fa)
-                                                    * (Dms[b0, l] * (1.0 - fb) + Dms[b0 + 1, l] * fb) * Kms[l])
-            l0 = seg_end[k]
-            s_lo = s_hi
+    n_chunks = (P + chunk - 1) // chunk
+    for c in _prange(n_chunks):  # chunks of pairs: per-chunk buffers for the node and wavelength sums
+        sk = np.empty(K + C.shape[3])
+        sl = np.empty(L)
+        for p in range(c * chunk, min(P, (c + 1) * chunk)):
+            ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
+            ox, oy, oz = wo[p, 0], wo[p, 1], wo[p, 2]
+            if iz <= 0.0 or oz <= 0.0:
+                continue
+            ri = np.sqrt(ix * ix + iy * iy)
+            ro = np.sqrt(ox * ox + oy * oy)
+            cphi = 2.0
+            if ri > 1e-9 and ro > 1e-9:
+                cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
+            xi = min(np.arccos(min(iz, 1.0)) * (180.0 / np.pi) / astep, NA - 1.000001)
+            a0 = int(xi)
+            fa = xi - a0
+            xo = min(np.arccos(min(oz, 1.0)) * (180.0 / np.pi) / astep, NA - 1.000001)
+            b0 = int(xo)
+            fb = xo - b0
+            _lobe_at_wavelengths_nb(C, a0, fa, b0, fb, cphi, seg, lw, sk, sl)
+            ga = 1.0 - fa
+            gb = 1.0 - fb
+            da0 = Dms[a0]
+            da1 = Dms[a0 + 1]
+            db0 = Dms[b0]
+            db1 = Dms[b0 + 1]
+            o = out[p]
+            for l in range(L):  # branch-free: vectorises
+                o[l] += sl[l] * ((da0[l] * ga + da1[l] * fa) * (db0[l] * gb + db1[l] * fb) * Kms[l])
 
 
 if _nb is not None:
     _prange = _nb.prange
-    _lobe_sum_nb = _nb.njit(inline="always", fastmath=True, cache=True)(_lobe_sum)
+    _lobe_at_wavelengths_nb = _nb.njit(inline="always", fastmath=True, cache=True)(_lobe_at_wavelengths)
     _add_modes = _nb.njit(parallel=True, fastmath=True, cache=True)(_add_modes_py)
 else:  # pragma: no cover
     _prange = range
-    _lobe_sum_nb = _lobe_sum
+    _lobe_at_wavelengths_nb = _lobe_at_wavelengths
     _add_modes = _add_modes_py
 
 
@@ -352,6 +379,12 @@ def _node_weights(tab):
     else:
         lk, lw = np.zeros(tab.L, np.int64), np.zeros(tab.L)
     return lk.astype(np.int64), lw.astype(float)
+
+
+def _node_runs(lk, K):
+    """Run boundaries of the node intervals: wavelengths seg[k] … seg[k + 1] − 1 have lk = k
+    (lk non-decreasing; one run, 0 … L, with a single node)."""
+    return np.searchsorted(lk, np.arange(max(K - 1, 1) + 1), side="left").astype(np.int64)
 
 
 def lobe_factor(tab, wi, wo) -> np.ndarray:
@@ -387,8 +420,5 @@ def add_azimuth_modes(tab, wi, wo, out):
     if C.shape[-1] == 0:
         return
     lk, lw = _node_weights(tab)
-    K = C.shape[2]
-    seg_end = np.searchsorted(lk, np.arange(1, max(K - 1, 1)), side="left").astype(np.int64)
-    seg_end = np.append(seg_end, tab.L).astype(np.int64)  # the last run ends at L
-    _add_modes(np.ascontiguousarray(wi, float), np.ascontiguousarray(wo, float), out, tab.Dms,
-               np.asarray(tab.Kms, float), C, seg_end, lw, float(tab.astep))
+    _add_modes(np.ascontiguousarray(wi, float), np.ascontiguousarray(wo, float), out, np.ascontiguousarray(tab.Dms),
+               np.ascontiguousarray(tab.Kms, float), C, _node_runs(lk, C.shape[2]), lw, float(tab.astep), _CHUNK_PAIRS)
