@@ -335,6 +335,28 @@ def auto_green(ndim: int, table) -> tuple[str, str]:
     return AUTO_GREEN, "default operator"
 
 
+
+def auto_spectrum_method(n_phases: int, table, solver: str = "cocg", dtype="complex128",
+                         return_fields: bool = False) -> tuple[str, str]:
+    """What ``method="auto"`` of :func:`fft_permittivity` takes for the spectrum ``table``
+    (wavelengths × phases), and why: one Lanczos run per loading for a two-phase cell over several
+    wavelengths solved by COCG without local fields, when
+    :func:`~nmmm.homogenize.work_estimate.choose_spectrum_method` estimates it cheaper; otherwise
+    per-wavelength solves. Never with a low-loss metal: there finite-precision Lanczos (no
+    reorthogonalisation) falls behind COCG and its estimated residual is no longer the true one
+    (64³, willot2014, tol 1e-5: flakes −50 + 1i 1284 steps vs COCG 498 and ε_xx 2.3e-3 apart, COCG's
+    true residual 9.7e-6; Boolean spheres −50 + 1i 540 vs 304, 6.4e-5 apart; flakes −50 + 5i 419 vs
+    291, 5.8e-6 apart), while at −44 + 13i both take 181 and agree to 4e-11. Also used by
+    :mod:`~nmmm.homogenize.spectral_batches` to plan its tasks."""
+    from nmmm.homogenize.work_estimate import choose_spectrum_method
+
+    if (n_phases != 2 or table.shape[0] < 2 or solver != "cocg" or return_fields
+            or metal_dielectric(table, LOW_LOSS)):
+        return "per_wavelength", ("one wavelength, another solver, local fields, more than two phases or a "
+                                  "low-loss metal (Lanczos drifts there)")
+    return choose_spectrum_method(table.shape[0], dtype)
+
+
 def fft_permittivity(
     labels,
     eps,
@@ -512,27 +534,16 @@ def fft_permittivity(
     dirs = tuple(range(d)) if directions is None else tuple(int(j) for j in directions)
     if not dirs or any(j < 0 or j >= d for j in dirs):
         raise InvalidInputError(f"directions must be axes in 0..{d - 1}, got {directions!r}")
-    from nmmm.homogenize.work_estimate import check_fft_work, choose_spectrum_method
+    from nmmm.homogenize.work_estimate import check_fft_work
 
     method_switch = None
     method_reason = f"method={method!r} asked"
     if mkey == "auto":
-        mkey = "per_wavelength"
-        method_reason = ("auto: one wavelength, another solver, local fields, more than two phases or a low-loss "
-                         "metal (Lanczos drifts there)")
-        # on the whole spectrum (``decide``), so that every chunk of spectral_batches takes the same method;
-        # not with a low-loss metal: there finite-precision Lanczos (no reorthogonalisation) falls behind
-        # COCG and its estimated residual is no longer the true one (64³, willot2014, tol 1e-5: flakes
-        # −50 + 1i 1284 steps vs COCG 498 and ε_xx 2.3e-3 apart, COCG's true residual 9.7e-6; Boolean
-        # spheres −50 + 1i 540 vs 304, 6.4e-5 apart; flakes −50 + 5i 419 vs 291, 5.8e-6 apart), while at
-        # −44 + 13i both take 181 and agree to 4e-11
-        if (values.size == 2 and decide.shape[0] > 1 and key == "cocg" and not return_fields
-                and not metal_dielectric(decide, LOW_LOSS)):
-            mkey, why = choose_spectrum_method(arr.shape, decide.shape[0], len(dirs), dt,
-                                               metal=metal_dielectric(decide))
-            method_reason = "auto: " + why
-            if mkey == "lanczos":
-                method_switch = {"what": "method", "from": "per_wavelength", "to": "lanczos", "reason": why}
+        # on the whole spectrum (``decide``), so that every chunk of spectral_batches takes the same method
+        mkey, why = auto_spectrum_method(values.size, decide, key, dt, return_fields)
+        method_reason = "auto: " + why
+        if mkey == "lanczos":
+            method_switch = {"what": "method", "from": "per_wavelength", "to": "lanczos", "reason": why}
     work = check_fft_work(arr.shape, n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt,
                           metal=metal_dielectric(table), max_memory_gb=max_memory_gb, max_minutes=max_minutes,
                           advice=work_advice, method=mkey)
@@ -698,5 +709,5 @@ def fft_permittivity(
 
 
 __all__ = ["fft_permittivity", "FFTHomogenization", "auto_green", "metal_dielectric", "LOW_LOSS", "PROBE",
-           "COMPLEX64_METAL_TOL", "METHODS", "SPECTRUM_METHODS", "PREDICT", "PREDICT_FROM", "first_prediction", "predicted_projections",
+           "COMPLEX64_METAL_TOL", "METHODS", "SPECTRUM_METHODS", "auto_spectrum_method", "PREDICT", "PREDICT_FROM", "first_prediction", "predicted_projections",
            "slow_solve_monitor"]

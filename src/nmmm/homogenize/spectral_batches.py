@@ -131,22 +131,19 @@ def _solve_piece(labels, by_label, segments, wavelength_nm, dirs, kwargs):
     return out
 
 
-def _lanczos_expected(values, table, dirs, shape, kwargs) -> bool:
+def _lanczos_expected(values, table, kwargs) -> bool:
     """Whether fft_permittivity's ``method="auto"`` takes one Lanczos run per loading for the whole
     spectrum (the rule of :func:`~nmmm.homogenize.fft.fft_permittivity`); used only to plan the
     cut — the solves make the choice themselves."""
-    from nmmm.homogenize.fft import LOW_LOSS, metal_dielectric
-    from nmmm.homogenize.work_estimate import choose_spectrum_method
+    from nmmm.homogenize.fft import auto_spectrum_method
 
     method = str(kwargs.get("method", "auto")).lower().replace("-", "_")
     if method != "auto":
         return method == "lanczos"
-    if (values.size != 2 or table.shape[0] < 2 or kwargs.get("solver", "cocg") != "cocg"
-            or metal_dielectric(table, LOW_LOSS)):
-        return False
-    dt = kwargs.get("dtype", "complex128")
+    solver = str(kwargs.get("solver", "cocg")).lower().replace("-", "_")
     try:
-        return choose_spectrum_method(shape, table.shape[0], len(dirs), dt, metal=metal_dielectric(table))[0] == "lanczos"
+        return auto_spectrum_method(values.size, table, solver, kwargs.get("dtype", "complex128"),
+                                    bool(kwargs.get("return_fields", False)))[0] == "lanczos"
     except Exception:  # an unusual dtype or shape: plan as per wavelength
         return False
 
@@ -211,7 +208,7 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
         raise InvalidInputError(f"directions must be axes in 0..{d - 1}, got {directions!r}")
     by_label = {int(v): table[:, i] for i, v in enumerate(values)}
     kwargs.setdefault("workers", 1)
-    whole_loadings = _lanczos_expected(values, table, dirs, arr.shape, kwargs)
+    whole_loadings = _lanczos_expected(values, table, kwargs)
     kwargs["_decide_on"] = table
     from nmmm.cluster import dask_client
 

@@ -105,8 +105,7 @@ def estimate_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None =
     return {"voxels": voxels, "memory_gb": memory_gb, "projections": projections, "seconds": seconds}
 
 
-def choose_spectrum_method(shape, n_wavelengths: int, n_loadings: int, dtype="complex128",
-                           metal: bool = False) -> tuple[str, str]:
+def choose_spectrum_method(n_wavelengths: int, dtype="complex128") -> tuple[str, str]:
     """"lanczos" or "per_wavelength" for a two-phase cell over ``n_wavelengths``, and why.
 
     Per wavelength, warm-started: P (1 + :data:`WARM_START_FRACTION` (n − 1)) projections per
@@ -115,9 +114,9 @@ def choose_spectrum_method(shape, n_wavelengths: int, n_loadings: int, dtype="co
     cancels, so the choice depends on the number of wavelengths and the precision only
     (complex128: Lanczos from 6 wavelengths on; complex64: from 10).
 
-    >>> choose_spectrum_method((64, 64, 64), 81, 3, "complex64")[0]
+    >>> choose_spectrum_method(81, "complex64")[0]
     'lanczos'
-    >>> choose_spectrum_method((64, 64, 64), 9, 3, "complex64")[0]
+    >>> choose_spectrum_method(9, "complex64")[0]
     'per_wavelength'
     """
     n = int(n_wavelengths)
