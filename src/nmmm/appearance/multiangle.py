@@ -115,6 +115,19 @@ GEOMETRY_SOURCES = {
 }
 
 
+def _angle_pairs(aspecular_deg, azimuth_deg):
+    """(γ, φ) as two flat float arrays of equal length: ``azimuth_deg`` is one value or one per angle."""
+    g = np.atleast_1d(np.asarray(aspecular_deg, float))
+    phi = np.atleast_1d(np.asarray(azimuth_deg, float))
+    try:
+        g, phi = np.broadcast_arrays(g, phi)
+    except ValueError:
+        raise InvalidInputError(
+            f"azimuth_deg (shape {phi.shape}) must be one value or one per aspecular angle (shape {g.shape})"
+        ) from None
+    return g.ravel().copy(), phi.ravel().copy()
+
+
 def aspecular_directions(aspecular_deg, illumination_deg: float = 45.0, azimuth_deg=0.0):
     """Incident and viewing unit vectors for aspecular angles γ (deg).
 
@@ -131,14 +144,7 @@ def aspecular_directions(aspecular_deg, illumination_deg: float = 45.0, azimuth_
     ti = float(check_finite(illumination_deg, "illumination_deg"))
     if not 0 <= ti < 90:
         raise InvalidInputError(f"illumination_deg must lie in [0, 90), got {ti}")
-    phi = np.atleast_1d(check_finite(azimuth_deg, "azimuth_deg")).astype(float)
-    try:
-        g, phi = np.broadcast_arrays(g, phi)
-    except ValueError:
-        raise InvalidInputError(
-            f"azimuth_deg (shape {phi.shape}) must be one value or one per aspecular angle (shape {g.shape})"
-        ) from None
-    g, phi = g.ravel(), phi.ravel()
+    g, phi = _angle_pairs(g, check_finite(azimuth_deg, "azimuth_deg"))
     ri, rg, rp = np.radians(ti), np.radians(g), np.radians(phi)
     wi = np.array([np.sin(ri), 0.0, np.cos(ri)])
     r = np.array([-np.sin(ri), 0.0, np.cos(ri)])
@@ -256,13 +262,7 @@ def multiangle_lab(brdf, wavelength_nm, aspecular_deg=ASTM_E2539_ASPECULAR_DEG, 
     g = np.atleast_1d(np.asarray(aspecular_deg, float))
     phi = None
     if azimuth_deg is not None:
-        phi = np.atleast_1d(np.asarray(azimuth_deg, float))
-        try:
-            g, phi = (np.ravel(a).copy() for a in np.broadcast_arrays(g, phi))
-        except ValueError:
-            raise InvalidInputError(
-                f"azimuth_deg (shape {phi.shape}) must be one value or one per aspecular angle (shape {g.shape})"
-            ) from None
+        g, phi = _angle_pairs(g, azimuth_deg)
     R = multiangle_reflectance(brdf, w, g, illumination_deg, 0.0 if phi is None else phi)
     xyz, lab = _spectra_to_lab(w, R, illuminant, observer)
     return MultiAngleColour(g, float(illumination_deg), w, R, np.asarray(xyz), np.asarray(lab), illuminant,
