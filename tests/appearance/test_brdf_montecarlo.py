@@ -110,6 +110,36 @@ both sides, the reversed stack for light from below; nothing of the BRDF model);
 reflected with the grey probability R̄/(R̄ + T̄) or goes straight on (:func:`_flake_hit`, spectral weights
 R/p, T/(1 − p)). Checked by a white furnace (lossless flake: 1.00000 ± 0.00001) and the exact two-stream
 solution for flat flakes, asymmetric lossy stack (``test_tracer_transmitting_flakes_white_furnace_and_two_flux``).
+
+Against it, the shipped Fe2O3/mica pearl's coat (deposit tilt, τ = 0.72, n = 1.5, primer 0.15) with its own
+flakes and with TiO2/mica (120 nm anatase, 400 nm mica), θi = 45°, the bins above, n_quad = 96 (the narrow
+deposit tilt leaves 24 1 % low in the specular bin). Per case and wavelength (450 / 550 / 650 nm): largest
+|model − MC| / MC over the 12 bins, largest |z|, bins beyond 4 SE + 0.1 %, albedo model − MC:
+
+    model as it was (extinction with the flakes' mean transmission T̄; pearl 4·10^6 photons, bin SE ≤ 0.64 %)
+      pearl, separable lobe (what it used)  2.3/3.3/4.0 %  |z| 4.7/5.3/11.7  1/3/4 bins   −0.0001/+0.0001/−0.0005
+      pearl, transport lobe                 1.5/1.7/2.2 %  |z| 4.2/4.1/6.4   0/0/3 bins   −0.0001/−0.0000/−0.0008
+    TiO2/mica (2·10^6 photons, SE ≤ 0.85 %): albedo +0.023 / +0.044 at 550 / 650 nm (z 300), its multiple term
+      ×25–40 (F_ms 0.153 where the tracer's multiple light is 0.0009 of the incident)
+    now (extinction per direction, τ a(μ) (1 − T̄(μ, λ)) / μ, T̄(μ) the flakes' T averaged over the normals a ray
+    along μ meets: ``_Tables.optical_path``)
+      pearl, separable lobe                 2.6/2.5/2.6 %  |z| 5.4/5.8/7.1   2/3/5 bins   −0.0001/−0.0002/−0.0000
+      pearl, transport lobe (now used)      2.0/1.5/0.9 %  |z| 4.1/4.4/2.8   0/1/0 bins   −0.0001/−0.0003/−0.0003
+      TiO2/mica, separable lobe             2.2/0.7/2.5 %  |z| 3.2/1.5/5.6   0/0/3 bins   +0.0002/+0.0001/−0.0000
+      TiO2/mica, transport lobe (now used)  1.9/0.8/1.0 %  |z| 2.2/1.6/2.7   0/0/0 bins   −0.0001/+0.0001/−0.0002
+
+Component by component (hemispherical, θi = 45°) the mean transmission was the error: TiO2/mica at 550 / 650
+nm one flake 0.0098 / 0.0330 against the tracer's 0.0101 / 0.0360, substrate 0.0568 / 0.0466 against 0.0608 /
+0.0551 (T(θ) at 550 nm is 0.95–1.0 up to 60° and falls to 0 at grazing incidence: T̄ = 0.93 over-attenuates the
+escaping directions) — and the transport's kernel, renormalised to the mean extinction, reflected too much in
+the escape cone (550 nm: ×1.5 at normal incidence, ×2.3 at 20°, ×0.15 at 80°), hence F_ms. With the extinction
+per direction: one flake 0.0101 / 0.0359, substrate 0.0608 / 0.0551, multiple 0.0009 / 0.0038 against 0.0009
+/ 0.0040. The lobe's shape (the multiple term's bins, model / tracer, min–max over the bins): pearl transport
+0.79–0.85 / 0.87–0.91 / 0.96–0.98, separable 0.69–1.11 / 0.78–1.19 / 0.90–1.19; TiO2/mica transport 0.95–1.01 /
+0.90–1.14 / 0.92–0.96, separable 0.88–1.16 / 0.97–1.08 / 0.76–1.33: the transport's shape, which
+ms_azimuth.lobe_tables now keeps for these paints (their c̄_0 > 5 % had switched them to the separable lobe).
+Left: the pearl's multiple amount is 10–20 % low at 450–550 nm (a small term; not transmission, the same for
+an opaque flake with the pearl's R(θ): ``test_transmitting_flakes_multiple_amount``, xfail).
 """
 
 import numpy as np
@@ -914,3 +944,113 @@ def test_tracer_transmitting_flakes_white_furnace_and_two_flux():
     assert np.all(np.abs(r["single_flake"] - single) < N_SE * se + 1e-3), (r["single_flake"], single)
     assert np.abs(got - swapped)[0] > 10 * se[0], (got, swapped, se)
 
+
+TRANSMITTING_WAVELENGTHS = np.arange(380.0, 781.0, 10.0)  # the recipe's grid: the lobe rule sees all its nodes
+
+
+def _transmitting_paint(case):
+    """The shipped pearl's coat (fe2o3_mica_pearl: deposit tilt, τ = 0.72, n = 1.5, primer 0.15, no pigment) with its
+    own flakes (hematite 60 nm / mica 400 nm incoherent / hematite 60 nm) or TiO2/mica (120 nm anatase, 400 nm)."""
+    from dataclasses import replace
+
+    from nmmm.appearance.flakes import mica_pigment
+    from nmmm.demo.appearance import _recipe_coat
+
+    if case == "interference_paint()":  # the package's default pearlescent paint: σ = 10°, τ = 1, dark base 0.03
+        from nmmm.appearance.brdf import interference_paint
+
+        return interference_paint()
+    paint, _ = _recipe_coat("fe2o3_mica_pearl", TRANSMITTING_WAVELENGTHS).brdf(TRANSMITTING_WAVELENGTHS)
+    if case == "TiO2/mica":
+        paint = paint.with_(flakes=replace(paint.flakes, optics=mica_pigment(120.0, 400.0)))
+    return paint
+
+
+def _trace_transmitting(paint, n_photons, seed, split_bins=False):
+    """The tracer on ``paint``'s coat at θi = 45°, one run per wavelength of WAVELENGTHS (the grey branch
+    probability is then exact: no spectral-weight variance): dict λ -> trace_coat's dict."""
+    fl = paint.flakes
+    body = paint.body_reflectance
+    rho = float(np.ravel(body[1] if isinstance(body, tuple) else body)[0])  # grey in both paints
+    n = float(np.mean(paint.coat.index(TRANSMITTING_WAVELENGTHS)))  # the binder, both sides of the flakes
+    out = {}
+    for j, lam in enumerate(WAVELENGTHS):
+        f = StackFlake(fl.optics.layers, [lam], n)
+        out[lam] = trace_coat(45.0, fl.optical_depth, f, fl.tilt, np.zeros(1), 0.0, 0.0, fl.depth_range, rho=rho, n=n,
+                              n_photons=n_photons, theta_edges_deg=THETA_EDGES, phi_edges_deg=PHI_EDGES, seed=seed + j,
+                              split_bins=split_bins)
+    return out
+
+
+def _model_on(paint, components=None, n_quad=96):
+    """albedo (3,), bins (nθ, nφ, 3) and, per component, the hemispherical albedo (3,) at θi = 45° on WAVELENGTHS
+    (n_quad = 96: the deposit's narrow tilt, mean 6.8°, leaves n_quad = 24 1 % low in the specular bin)."""
+    w = TRANSMITTING_WAVELENGTHS
+    li = np.searchsorted(w, WAVELENGTHS)
+    wi = _wi(45.0)
+    a = paint.albedo(w, wi)[li]
+    b = paint.bin_average(w, wi, THETA_EDGES, PHI_EDGES, n_quad=n_quad)[..., li]
+    te, pe = np.linspace(0.0, 90.0, 19), np.linspace(0.0, 360.0, 25)
+    t = np.radians(te)
+    proj = 0.5 * (np.sin(t[1:]) ** 2 - np.sin(t[:-1]) ** 2)[:, None] * np.radians(np.diff(pe))[None, :]
+    comp = {c: np.einsum("ab,abl->l", proj, paint.bin_average(w, wi, te, pe, components=(c,), n_quad=8)[..., li])
+            for c in (components or ())}
+    return a, b, comp
+
+
+@pytest.mark.parametrize("case", ["Fe2O3/mica pearl", "TiO2/mica", "interference_paint()"])
+def test_transmitting_flakes_match_mc(case):
+    """Interference flakes that reflect and transmit, in the shipped pearl's coat, against the tracer (3·10^5
+    photons per wavelength, θi = 45°): the paint's multiple lobe is the transport's, the one-flake and substrate
+    terms (extinction per direction: τ a(μ) (1 − T̄(μ, λ)) / μ, ``_Tables.optical_path``) and the albedo within
+    4 SE + 0.003, every bin within 4 SE + quadrature (MODEL_TOL_BINS). Measured at 4·10^6 (pearl) and 2·10^6
+    (TiO2/mica) photons: module docstring, issue 18 (transmitting flakes); interference_paint() at 5·10^5: every
+    bin within 2.1 SE, albedo within 0.0005 (its far bins had been 2.4-2.7x the tracer's at 550/650 nm)."""
+    paint = _transmitting_paint(case)
+    assert paint.prepare(TRANSMITTING_WAVELENGTHS).ms_lobe_shape == "transport"
+    r = _trace_transmitting(paint, 300_000, seed={"F": 600, "T": 700, "i": 800}[case[0]])
+    a, b, comp = _model_on(paint, ("flakes", "base"))
+    for j, lam in enumerate(WAVELENGTHS):
+        t = r[lam]
+        tol = N_SE * t["albedo_se"][0] + 0.003
+        assert abs(a[j] - t["albedo"][0]) < tol, (case, lam, a[j], t["albedo"])
+        assert abs(comp["flakes"][j] - t["single_flake"][0]) < tol, (case, lam, comp["flakes"][j], t["single_flake"])
+        assert abs(comp["base"][j] - t["base"][0]) < tol, (case, lam, comp["base"][j], t["base"])
+        B, Bse = t["bins"][..., 0], t["bins_se"][..., 0]
+        z = np.round((b[..., j] - B) / Bse, 1)
+        assert np.all(np.abs(b[..., j] - B) < N_SE * Bse + MODEL_TOL_BINS * B), (case, lam, z)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ["Fe2O3/mica pearl", "TiO2/mica"])
+def test_transmitting_flakes_match_mc_at_1e6_photons(case):
+    """The comparison behind the lobe rule of ms_azimuth.lobe_tables at 10^6 photons per wavelength (bin SE
+    ≤ 1.3 %): every bin within 4 SE + quadrature and the albedo within 4 SE + 0.001 with the transport's lobe
+    (module docstring: the table for both lobes)."""
+    paint = _transmitting_paint(case)
+    r = _trace_transmitting(paint, 1_000_000, seed=640 if case.startswith("Fe") else 740)
+    a, b, _ = _model_on(paint)
+    for j, lam in enumerate(WAVELENGTHS):
+        t = r[lam]
+        assert abs(a[j] - t["albedo"][0]) < N_SE * t["albedo_se"][0] + 1e-3, (case, lam, a[j], t["albedo"])
+        B, Bse = t["bins"][..., 0], t["bins_se"][..., 0]
+        z = np.round((b[..., j] - B) / Bse, 1)
+        assert np.all(np.abs(b[..., j] - B) < N_SE * Bse + MODEL_TOL_BINS * B), (case, lam, z)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "the pearl's multiply scattered amount at 45° is low: model / tracer 0.82 / 0.89 / 0.97 at 450 / 550 / 650 nm "
+    "(10^6 photons; the bins of the multiple term 0.79-0.85 / 0.87-0.91 / 0.96-0.98 at 4e6). Not transmission: an "
+    "opaque flake with the pearl's R(θ) gives 0.78-0.84 / 0.82-0.89 / 0.91-0.97, and with the same flakes but T "
+    "independent of angle (the model's extinction then exact) the amount was 0.82 / 0.89 / 0.96 with its one-flake "
+    "and substrate terms exact: F_ms's directional amount (1 − E⁰(θi)) F_ms for weakly reflecting flakes in a "
+    "narrow-tilt coat. A small term (0.8 / 1.7 / 5.6 % of the albedo; the one-flake and substrate terms within "
+    "0.5 %): the bins of the total pass (test above)"))
+def test_transmitting_flakes_multiple_amount():
+    """The multiple term (hemispherically integrated, θi = 45°) within 5 % of the tracer's for the pearl."""
+    paint = _transmitting_paint("Fe2O3/mica pearl")
+    r = _trace_transmitting(paint, 1_000_000, seed=640)
+    _, _, comp = _model_on(paint, ("multiple",))
+    mc_ms = np.array([r[lam]["multiple"][0] for lam in WAVELENGTHS])
+    assert np.all(np.abs(comp["multiple"] / mc_ms - 1.0) < 0.05), comp["multiple"] / mc_ms

@@ -87,7 +87,7 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     if flakes:
         G = flake_kernels(tab, mu, sn, dmu, n_modes)  # (M+1, up/down, actual/lossless, j, k, L)
         eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu
-        target = eps[:, None] * (tab.tau_e / tab.tau)[None, :]  # (k, L) per unit τ
+        target = eps[:, None] * tab.extinction_ratio(np.degrees(th))  # (k, L) per unit τ
         col0 = G[0, :, 1].sum(axis=(0, 1))
         G *= np.where(col0 > 0, target / np.where(col0 > 0, col0, 1.0), 0.0)[None, None, None, None]
         fe = getattr(tab, "edge", 0.0)

@@ -78,7 +78,7 @@ class _EffectTables(_Tables):
         mu = np.maximum(mu, 1e-12)
         x = np.outer(1.0 / mu, kappa)
         if self.has_flakes:
-            x = x + np.outer(_lerp1(self.a_tab, _deg(mu), self.step) / mu, self.tau_e)
+            x = x + self.optical_path(mu)
         return np.exp(-x)
 
     def _albedo_tables(self):
@@ -155,7 +155,8 @@ class _EffectTables(_Tables):
             kb = np.zeros(self.L)
         _effect_kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
                        self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
-                       np.ascontiguousarray(self.tau_e, float), kap * self.dz, self._Qd, self._Qz, self._Qb,
+                       np.ascontiguousarray(self.tau_e, float), self.ext_tab, kap * self.dz, self._Qd, self._Qz,
+                       self._Qb,
                        self._s2_step, bool(self.tau_e_const), self.z0, self.dz, np.ascontiguousarray(kb, float),
                        np.ascontiguousarray(self.Dms), Kms, C, _node_runs(lk, C.shape[2]), lw.astype(float),
                        "specular" in comps, "flakes" in comps and self.has_flakes, do_ms, _CHUNK_PAIRS)
@@ -184,8 +185,9 @@ class _EffectTables(_Tables):
                  + _lerp1(self.a_tab, _deg(op[:, 2]), self.step) / op[:, 2])
         else:
             S = np.zeros(P)
-        X = np.outer(S, self.tau_e) + np.outer(S2, self.kappa) * self.dz
-        eX = np.exp(-np.outer(S, self.tau_e)) * _s2_lerp(self._Qd, S2, self._s2_step)  # e^−X, as the kernel
+        Xf = self.optical_path(ip[:, 2]) + self.optical_path(op[:, 2]) if self.has_flakes else np.outer(S, self.tau_e)
+        X = Xf + np.outer(S2, self.kappa) * self.dz
+        eX = np.exp(-Xf) * _s2_lerp(self._Qd, S2, self._s2_step)  # e^−X, as the kernel
         if self.has_flakes and "flakes" in comps:
             h = ip + op
             h /= np.linalg.norm(h, axis=-1, keepdims=True)
@@ -214,8 +216,11 @@ def _pos(c, step, n_nodes):
     return i, x - i
 
 
-def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kd, Qd, Qz, Qb,
-                      s2_step, tau_e_const, z0, dz, kb, Dms, Kms, C, seg, lw, do_spec, do_flakes, do_ms, chunk):
+def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, ext, kd, Qd, Qz,
+                      Qb, s2_step, tau_e_const, z0, dz, kb, Dms, Kms, C, seg, lw, do_spec, do_flakes, do_ms, chunk):
+    """The terms of the module docstring per pair, one loop over wavelengths; the flake layer's
+    extinction τ_e S for opaque flakes (``tau_e_const``), else from ``ext`` (NT, L) = τ a(μ) (1 − T̄(μ, λ))
+    per internal direction (``_Tables.optical_path``)."""
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
@@ -265,12 +270,15 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
             g = 0.0
             c0 = 0
             fc = 0.0
+            ki, fki, ko, fko = 0, 0.0, 0, 0.0
+            inv_i, inv_o = 0.0, 0.0
             if tau > 0.0:
-                k0, fa = _pos_nb(ipz, step, NT)
-                a_i = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
-                k0, fa = _pos_nb(opz, step, NT)
-                a_o = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
+                ki, fki = _pos_nb(ipz, step, NT)
+                a_i = a_tab[ki] * (1.0 - fki) + a_tab[ki + 1] * fki
+                ko, fko = _pos_nb(opz, step, NT)
+                a_o = a_tab[ko] * (1.0 - fko) + a_tab[ko + 1] * fko
                 S = a_i / ipz + a_o / opz
+                inv_i, inv_o = 1.0 / ipz, 1.0 / opz
                 if do_flakes:
                     hx, hy, hz = ipx + opx, ipy + opy, ipz + opz
                     hn = np.sqrt(hx * hx + hy * hy + hz * hz)
@@ -296,12 +304,15 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
                 _lobe_at_wavelengths_nb(C, ai0, fai, ao0, fao, cphi, seg, lw, sk, sl)
             o = out[p]
             for l in range(L):  # few branches, all the same for every l
-                x = tau_e[l] * S + kd[l] * S2
                 e = Qd[js, l] * (1.0 - fs) + Qd[js + 1, l] * fs
                 if tau_e_const:
+                    x = tau_e[l] * S + kd[l] * S2
                     e *= e_t0
                 else:
-                    e *= np.exp(-tau_e[l] * S)
+                    xf = ((ext[ki, l] * (1.0 - fki) + ext[ki + 1, l] * fki) * inv_i
+                          + (ext[ko, l] * (1.0 - fko) + ext[ko + 1, l] * fko) * inv_o)
+                    x = xf + kd[l] * S2
+                    e *= np.exp(-xf)
                 fl = g * (1.0 - e) / (x + 1e-300) * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
                 if has_z0:
                     fl *= Qz[js, l] * (1.0 - fs) + Qz[js + 1, l] * fs

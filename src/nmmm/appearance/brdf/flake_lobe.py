@@ -6,7 +6,9 @@ The pointwise lobe (evaluated per direction pair in :mod:`~nmmm.appearance.brdf.
 
     f_flake = T_i T_o / n² · τ p(h') R_flake(i'·h') / (4 μi' μo') · (1 − exp(−τ_e S)) / (τ_e S),
 
-S = a(i')/μi' + a(o')/μo' (see the package docstring). In a pigmented coat medium
+S = a(i')/μi' + a(o')/μo' (see the package docstring); for flakes that transmit τ_e S is
+τ a(μi')(1 − T̄(μi'))/μi' + τ a(μo')(1 − T̄(μo'))/μo', T̄(μ) their transmission averaged over
+the normals a ray along μ meets (``_Tables.optical_path``). In a pigmented coat medium
 (:class:`~nmmm.appearance.brdf.CoatMedium`, optical thickness κ, flakes uniform in the band
 z0 … z0 + dz of the coat) the last factor becomes the depth average
 exp(−κ z0 S') (1 − exp(−X)) / X, X = τ_e S + κ dz S', S' = 1/μi' + 1/μo'.
@@ -22,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nmmm.appearance.brdf.interpolation import _deg, _lerp1, _lerp_table, _phi_mean
+from nmmm.appearance.brdf.interpolation import _deg, _lerp_table, _phi_mean
 from nmmm.appearance.flakes import refract_in, refract_out
 
 
@@ -84,17 +86,17 @@ def flake_single_scattering_albedo(tab, mua, n_theta: int = 24, n_phi: int = 32)
         if not np.any(ok):
             continue
         ck, opk, wok, wk = ck[ok], op[ok], wok[ok], wq[ok]
-        S = (_lerp1(tab.a_tab, _deg(ip[2]), tab.step) / ip[2]
-             + _lerp1(tab.a_tab, _deg(opk[:, 2]), tab.step) / opk[:, 2])
         To = _lerp_table(tab.Tc, _deg(wok[:, 2]), tab.step)
         kap = getattr(tab, "kappa", None)
+        # the flake layer's optical depth in and out (flakes that transmit: per direction and λ)
+        X = tab.optical_path(np.array([ip[2]])) + tab.optical_path(opk[:, 2])  # (K, L)
         if kap is None:  # no pigmented medium: the same attenuation for both
-            phi = tab.tau * _phi_mean(np.outer(S, tab.tau_e))  # (K, L)
+            phi = tab.tau * _phi_mean(X)  # (K, L)
             phi0 = phi
         else:  # flakes uniform in the band z0..z0+dz of a coat of optical thickness κ
             S2 = 1.0 / ip[2] + 1.0 / opk[:, 2]
             phi, phi0 = (tab.tau * np.exp(-np.outer(S2, kv) * tab.z0)
-                         * _phi_mean(np.outer(S, tab.tau_e) + np.outer(S2, kv) * tab.dz)
+                         * _phi_mean(X + np.outer(S2, kv) * tab.dz)
                          for kv in (tab.kappa, tab.kappa0))
         g = (wk * ck / ip[2])[:, None] * To
         out[k] = np.sum(g * phi * _lerp_table(tab.Rf, _deg(ck), tab.step), axis=0)

@@ -43,11 +43,13 @@ else:  # pragma: no cover
     _angle_pos_nb = _angle_pos
 
 
-def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, kb, Dms, Kms,
+def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, ext, kb, Dms, Kms,
                do_spec, do_flakes, do_base, do_ms, tau_e_const):
     """Per pair the geometry (table positions and per-pair weights) first, then one branch-free
     loop over wavelengths (the terms a paint lacks enter with weight 0, ``Rf`` then a (2, L)
-    table of zeros), so that the wavelength loop vectorises."""
+    table of zeros), so that the wavelength loop vectorises. Opaque flakes (``tau_e_const``):
+    extinction τ_e S; flakes that transmit: ``ext`` (NT, L) = τ a(μ) (1 − T̄(μ, λ)) along each
+    internal direction (``_Tables.optical_path``)."""
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
@@ -100,11 +102,12 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
         g = 0.0
         c0 = 0
         fc = 0.0
+        ki, fki, ko, fko = 0, 0.0, 0, 0.0
         if tau > 0.0:
-            k0, fa = _table_pos(ipz, step, NT)
-            a_i = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
-            k0, fa = _table_pos(opz, step, NT)
-            a_o = a_tab[k0] * (1.0 - fa) + a_tab[k0 + 1] * fa
+            ki, fki = _table_pos(ipz, step, NT)
+            a_i = a_tab[ki] * (1.0 - fki) + a_tab[ki + 1] * fki
+            ko, fko = _table_pos(opz, step, NT)
+            a_o = a_tab[ko] * (1.0 - fko) + a_tab[ko + 1] * fko
             S = a_i / ipz + a_o / opz
             if do_flakes:
                 hx, hy, hz = ipx + opx, ipy + opy, ipz + opz
@@ -135,8 +138,11 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
                              + w_ms * (Dms[ai0, l] * gai + Dms[ai0 + 1, l] * fai)
                              * (Dms[ao0, l] * gao + Dms[ao0 + 1, l] * fao) * Kms[l])
         else:
+            inv_i = 1.0 / ipz if tau > 0.0 else 0.0
+            inv_o = 1.0 / opz if tau > 0.0 else 0.0
             for l in range(L):
-                x = tau_e[l] * S
+                x = ((ext[ki, l] * (1.0 - fki) + ext[ki + 1, l] * fki) * inv_i
+                     + (ext[ko, l] * (1.0 - fko) + ext[ko + 1, l] * fko) * inv_o)
                 e = np.exp(-x)
                 ph = 1.0 - 0.5 * x if x < 1e-6 else (1.0 - e) / x
                 tt = (Tc[i0, l] * gi + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * go + Tc[o0 + 1, l] * fo) * inv_n2

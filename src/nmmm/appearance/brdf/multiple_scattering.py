@@ -63,7 +63,7 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, 
             G[s_out, 0] += wgt[..., None] * _lerp_table(tab.Rf, dc, tab.step).reshape(wgt.shape + (L,))
             G[s_out, 1] += wgt[..., None] * _lerp_table(tab.Rf0, dc, tab.step).reshape(wgt.shape + (L,))
     # the lossless kernel removes exactly τ_e/τ · a/μ per unit τ (corrects the quadrature)
-    target = a_mu[:, None] * (tab.tau_e / tab.tau)[None, :]  # (k, L)
+    target = a_mu[:, None] * tab.extinction_ratio(np.degrees(th))  # (k, L): transmission per direction
     col0 = (G[0, 1] + G[1, 1]).sum(axis=0)
     scale = np.where(col0 > 0, target / np.where(col0 > 0, col0, 1.0), 0.0)
     eye = np.eye(n_mu)

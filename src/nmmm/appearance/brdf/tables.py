@@ -58,15 +58,42 @@ class _Tables:
             self.Rf0 = np.clip(1.0 - Tf, 0.0, 1.0)
             tbar = _hemi_mean(Tf, mu)  # cosine-weighted mean flake transmittance
             self.tau_e = self.tau * np.clip(1.0 - tbar, 0.0, 1.0)  # (L,)
-            self.tau_e_const = bool(np.ptp(self.tau_e) <= 1e-12 * max(1.0, self.tau))
             self.a_tab = np.asarray(self.tilt.projected_mean(mu), float)  # over internal angle
+            self.T_dir = self._directional_transmission(Tf, mu)  # (NT, L)
+            # opaque flakes: one extinction at every wavelength and angle (the kernels' fast path)
+            self.tau_e_const = not bool(np.any(self.T_dir > 0))
+            # τ a(μ) (1 − T̄(μ, λ)): the flake layer's extinction along μ is this / μ (NT, L)
+            self.ext_tab = np.ascontiguousarray(self.tau * self.a_tab[:, None] * (1.0 - self.T_dir))
         else:
             self.tau = 0.0
             self.tau_e = np.zeros(self.L)
             self.tau_e_const = True
+            self.ext_tab = np.zeros((2, self.L))
         self._albedo_tables()
 
     # ------------------------------------------------------------------------------
+    def _directional_transmission(self, Tf, mu, n_theta: int = 32, n_phi: int = 24):
+        """T̄(μ, λ) = ∫ p(m) |u·m| T(|u·m|) dω_m / a(μ): the flakes' transmission averaged over
+        the normals a ray along internal cosine μ meets (weighted by their projected area), (NT, L).
+        The exact extinction per unit τ along u is a(μ) (1 − T̄(μ)) / μ: transmitted light keeps
+        its direction, so it is not scattered. Zero for opaque flakes."""
+        if not np.any(Tf > 0):
+            return np.zeros_like(Tf)
+        m, wq = self.tilt.quadrature(n_theta, n_phi, half=True)
+        s = np.sqrt(np.clip(1.0 - mu * mu, 0.0, 1.0))
+        c = np.abs(np.outer(s, m[:, 0]) + np.outer(mu, m[:, 2]))  # (NT, K)
+        cw = c * wq[None, :]
+        out = np.empty_like(Tf)
+        for j in range(mu.size):  # one direction at a time: (K, L) tables
+            tq = _lerp_table(Tf, _deg(c[j]), self.step)
+            out[j] = cw[j] @ tq / max(cw[j].sum(), 1e-300)
+        return np.clip(out, 0.0, 1.0)
+
+    def extinction_ratio(self, theta_deg):
+        """(1 − T̄(θ, λ)) at internal polar angles (k,) -> (k, L): the flake layer's extinction per
+        unit τ along θ relative to opaque flakes' a(μ)/μ (transmitted light is not scattered)."""
+        return 1.0 - _lerp_table(self.T_dir, np.asarray(theta_deg, float), self.step)
+
     def _ggx_albedo(self, mu_nodes, n_u=64, n_phi=64):
         a = self.alpha
         x, wx = np.polynomial.legendre.leggauss(n_u)
@@ -91,9 +118,20 @@ class _Tables:
             out[k] = wt @ F
         return out
 
-    def _t(self, a_over_mu):
-        """Transmission through the flake layer exp(−τ_e a/μ): (P,) -> (P, L)."""
-        return np.exp(-np.outer(a_over_mu, self.tau_e))
+    def _t(self, mu):
+        """Transmission through the flake layer along internal cosines μ (P,) -> (P, L):
+        exp(−τ a(μ) (1 − T̄(μ, λ)) / μ) (flakes that transmit: :meth:`_directional_transmission`)."""
+        return np.exp(-self.optical_path(mu))
+
+    def optical_path(self, mu):
+        """τ a(μ) (1 − T̄(μ, λ)) / μ, the flake layer's optical depth along internal cosines μ (P,) ->
+        (P, L); τ a(μ)/μ for opaque flakes."""
+        mu = np.maximum(np.asarray(mu, float), 1e-12)
+        if not self.has_flakes:
+            return np.zeros((mu.size, self.L))
+        if self.tau_e_const:
+            return np.outer(_lerp1(self.a_tab, _deg(mu), self.step) / mu, self.tau_e)
+        return _lerp_table(self.ext_tab, _deg(mu), self.step) / mu[:, None]
 
     def _albedo_tables(self):
         """E1 (single-scattering albedo), E10 (same, lossless), multiple-scattering lobe."""
@@ -115,10 +153,8 @@ class _Tables:
         xi = 0.5 * (xg + 1) * mu_c
         wi_ = 0.5 * wg * mu_c
         if self.has_flakes:
-            a_mie = _lerp1(self.a_tab, _deg(mu_i_e), self.step) / mu_i_e
-            a_tir = _lerp1(self.a_tab, _deg(xi), self.step) / np.maximum(xi, 1e-12)
-            t_e = self._t(a_mie)
-            t_tir = self._t(a_tir)
+            t_e = self._t(mu_i_e)
+            t_tir = self._t(xi)
         else:
             t_e = np.ones((mu_e.size, L))
             t_tir = np.ones((xi.size, L))
@@ -130,7 +166,7 @@ class _Tables:
         Esi = _lerp_table(self.Es, tha, self.step)
         mu_ii = np.sqrt(1 - (1 - mua ** 2) / (n * n))
         if self.has_flakes:
-            t_i = self._t(_lerp1(self.a_tab, _deg(mu_ii), self.step) / mu_ii)
+            t_i = self._t(mu_ii)
         else:
             t_i = np.ones((_NA, L))
         rho = self.rho
@@ -184,7 +220,7 @@ class _Tables:
             kb = np.zeros(self.L)
         _kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
                 self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
-                np.ascontiguousarray(self.tau_e, float), kb, self.Dms, np.asarray(self.Kms, float),
+                np.ascontiguousarray(self.tau_e, float), self.ext_tab, kb, self.Dms, np.asarray(self.Kms, float),
                 "specular" in comps, "flakes" in comps and self.has_flakes, do_base, do_ms,
                 bool(self.tau_e_const))
 
@@ -230,14 +266,15 @@ class _Tables:
                     g = g * _phi_mean(S * self.tau_e[0])
                     sub += g[:, None] * _lerp_table(self.Rf, _deg(cd), self.step)
                 else:
-                    sub += g[:, None] * _phi_mean(np.outer(S, self.tau_e)) * _lerp_table(self.Rf, _deg(cd), self.step)
+                    X = self.optical_path(ip[:, 2]) + self.optical_path(op[:, 2])
+                    sub += g[:, None] * _phi_mean(X) * _lerp_table(self.Rf, _deg(cd), self.step)
             if "base" in comps and np.any(self.rho > 0):
                 kb = self.rho / (np.pi * (1 - self.rho * self.r_t))
                 if self.has_flakes:
                     if self.tau_e_const:
                         sub += np.exp(-(ai + ao) * self.tau_e[0])[:, None] * kb
                     else:
-                        sub += np.exp(-np.outer(ai + ao, self.tau_e)) * kb
+                        sub += np.exp(-(self.optical_path(ip[:, 2]) + self.optical_path(op[:, 2]))) * kb
                 else:
                     sub += kb
             f += TT * sub
