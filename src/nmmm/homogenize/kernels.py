@@ -19,6 +19,11 @@ its FFTs:
   ψ = F⁻¹(phase · s) replaces the d inverse FFTs of Γ ŵ, and the gradient D ψ is taken in
   real space — fused into the COCG update, which then reads one scalar field instead of q.
 
+The two passes of each COCG iteration (:func:`direction_and_eps`, :func:`cocg_update_stencil`)
+run on the real views of the complex fields, with β, α and ε split into real and imaginary
+parts: written on complex values their loops did not vectorise (at 128³ complex64, 1 thread:
+direction 24 -> 13 ms, stencil update 24 -> 17-19 ms; issue 22).
+
 Fields are stored as ``(d, N)`` arrays (d components, N voxels, C order); labels as a flat
 ``(N,)`` integer array indexing a per-phase permittivity table.
 
@@ -50,6 +55,13 @@ SERIAL_BELOW = 1 << 17
 CHUNK = 1 << 15  # voxels per reduction chunk of the flat (d, N) kernels (contiguous runs per component)
 
 _kernel = njit(cache=True, fastmath=True, nogil=True)
+#: The COCG kernels written on real views (:func:`_direction_and_eps`, :func:`_cocg_update_stencil`):
+#: fast-math without ``contract``, so no fused multiply-add: every field value is rounded as written
+#: (as NumPy's separate products and sums round it), the same bits from every compilation — under
+#: ``fastmath=True`` the complex kernels were contracted in some compilations and not in others
+#: (two builds of the same ``_cocg_update`` gave x differing in half its values). The reductions
+#: may reassociate, and so vectorise: float64 sums of float32 terms, which move by ~1e-16 relative.
+_kernel_split = njit(cache=True, fastmath={"nnan", "ninf", "nsz", "arcp", "reassoc", "afn"}, nogil=True)
 
 
 @njit(inline="always")
@@ -116,34 +128,56 @@ def _project(F, a, b, ny, has_ny, mode, lo, hi):
                         F[2, i1, i2, i3] = 0
 
 
-@_kernel
-def _direction_and_eps(p, q, r, beta, labels, tab, update, part, lo, hi):
-    """Chunks lo..hi−1: p ← r + β p (if ``update``), q ← ε p; part[c] ← (Σ ε p·p, Σ_i (ε p)_j)."""
-    d, n = p.shape
+@_kernel_split
+def _direction_and_eps(p, q, r, b_re, b_im, labels, t_re, t_im, update, part, lo, hi):
+    """Chunks lo..hi−1: p ← r + β p (if ``update``), q ← ε p; part[c] ← (Σ ε p·p, Σ_i (ε p)_j).
+
+    p, q, r are the real views (d, 2N) of the complex fields (re, im interleaved), β and the
+    permittivity table are split into real and imaginary parts, and ε of the chunk is gathered
+    once into a buffer: on complex values and with the gather in the loop, the loop did not
+    vectorise and the pass took twice as long (issue 22)."""
+    d, n2 = p.shape
+    n = n2 // 2
+    e = np.empty(2 * CHUNK, dtype=p.dtype)
     for c in range((n + CHUNK - 1) // CHUNK):
         if c < lo or c >= hi:
             continue
         i0 = c * CHUNK
         i1 = min(n, i0 + CHUNK)
+        lab = labels[i0:i1]
+        m = lab.size
+        for i in range(m):
+            e[2 * i] = t_re[lab[i]]
+            e[2 * i + 1] = t_im[lab[i]]
         acc_re = 0.0
         acc_im = 0.0
         for j in range(d):
+            pj = p[j, 2 * i0:2 * i1]
+            qj = q[j, 2 * i0:2 * i1]
+            rj = r[j, 2 * i0:2 * i1]
             s_re = 0.0
             s_im = 0.0
-            for i in range(i0, i1):
-                e = tab[labels[i]]
+            for i in range(m):
+                e_re = e[2 * i]
+                e_im = e[2 * i + 1]
+                p_re = pj[2 * i]
+                p_im = pj[2 * i + 1]
                 if update:
-                    v = r[j, i] + beta * p[j, i]
-                    p[j, i] = v
+                    v_re = rj[2 * i] + (b_re * p_re - b_im * p_im)
+                    v_im = rj[2 * i + 1] + (b_re * p_im + b_im * p_re)
+                    pj[2 * i] = v_re
+                    pj[2 * i + 1] = v_im
                 else:
-                    v = p[j, i]
-                ev = e * v
-                q[j, i] = ev
-                w = ev * v
-                acc_re += w.real
-                acc_im += w.imag
-                s_re += ev.real
-                s_im += ev.imag
+                    v_re = p_re
+                    v_im = p_im
+                ev_re = e_re * v_re - e_im * v_im
+                ev_im = e_re * v_im + e_im * v_re
+                qj[2 * i] = ev_re
+                qj[2 * i + 1] = ev_im
+                acc_re += ev_re * v_re - ev_im * v_im
+                acc_im += ev_re * v_im + ev_im * v_re
+                s_re += ev_re
+                s_im += ev_im
             part[c, 2 + 2 * j] = s_re
             part[c, 3 + 2 * j] = s_im
         part[c, 0] = acc_re
@@ -266,12 +300,27 @@ def _nchunk(n: int) -> int:
     return (n + CHUNK - 1) // CHUNK
 
 
+def _real_view(a):
+    """The real view of a complex array: last axis doubled, (re, im) interleaved."""
+    return a.view(a.real.dtype)
+
+
+def _split_complex(z, real):
+    """Real and imaginary parts of the complex array ``z`` (1-D) as contiguous ``real`` arrays."""
+    z = np.asarray(z)
+    return np.ascontiguousarray(z.real, dtype=real), np.ascontiguousarray(z.imag, dtype=real)
+
+
 def direction_and_eps(p, q, r, beta, labels, tab, update, sums=None):
     """If ``update``: p ← r + β p. Then q ← ε p. Returns Σ ε p·p (bilinear, no conjugate), and
     writes Σ_voxels (ε p)_j into ``sums`` (complex128, length d) when given."""
     d, n = p.shape
+    real = p.real.dtype
+    beta = p.dtype.type(beta)
+    t_re, t_im = _split_complex(np.asarray(tab, dtype=p.dtype), real)
     part = np.zeros((_nchunk(n), 2 + 2 * d))
-    _split(_direction_and_eps, part.shape[0], p, p, q, r, beta, labels, tab, update, part)
+    _split(_direction_and_eps, part.shape[0], p, _real_view(p), _real_view(q), _real_view(r), real.type(beta.real),
+           real.type(beta.imag), labels, t_re, t_im, update, part)
     tot = _column_sums(part)
     if sums is not None:
         for j in range(d):
@@ -376,37 +425,96 @@ def _stencil_gradient(psi, F, kind, ih, lo, hi):
                     F[c, i1, i2, i3] = g[c, i3] * h
 
 
-@_kernel
-def _cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x, part, lo, hi):
-    """Planes lo..hi−1: x ← x + α p (if ``update_x``); r ← r − α D ψ / h (q = Γ ε p from its
-    potential); part[i1] ← (rᵀr, ‖r‖²) of the plane."""
-    n1, n2, n3 = psi.shape
+@njit(inline="always")
+def _grad_real(A, B, C, D, kind, g, k, kn):
+    """g[:, k] ← D ψ at the real value k of the real views of the rows A..D (:func:`_row_grad`;
+    a difference stencil acts on the real and imaginary parts alike); kn = k + 2 (periodic) is
+    the same part of the next voxel."""
+    if kind == 1:
+        c = A[k]
+        g[0, k] = C[k] - c
+        g[1, k] = B[k] - c
+        g[2, k] = A[kn] - c
+    else:
+        a = A[k] + A[kn]
+        b = B[k] + B[kn]
+        c = C[k] + C[kn]
+        d = D[k] + D[kn]
+        g[0, k] = (c + d) - (a + b)
+        g[1, k] = (b + d) - (a + c)
+        g[2, k] = (A[kn] + B[kn] + C[kn] + D[kn]) - (A[k] + B[k] + C[k] + D[k])
+
+
+@njit(cache=True, nogil=True)
+def _axpy(y, x, a_re, a_im, lo, hi):
+    """Chunks lo..hi−1 of real views (d, 2N): y ← y + α x, rounded as Numba's complex y + α x (no
+    fast-math: with reassociation LLVM rounds the sum differently). A pass of its own: a helper
+    called from a fast-math kernel is compiled with the caller's flags."""
+    d, n2 = y.shape
+    n = n2 // 2
+    for c in range((n + CHUNK - 1) // CHUNK):
+        if c < lo or c >= hi:
+            continue
+        i0 = c * CHUNK
+        i1 = min(n, i0 + CHUNK)
+        for j in range(d):
+            yj = y[j, 2 * i0:2 * i1]
+            xj = x[j, 2 * i0:2 * i1]
+            for i in range(i1 - i0):
+                x_re = xj[2 * i]
+                x_im = xj[2 * i + 1]
+                yj[2 * i] = yj[2 * i] + (a_re * x_re - a_im * x_im)
+                yj[2 * i + 1] = yj[2 * i + 1] + (a_re * x_im + a_im * x_re)
+
+
+@_kernel_split
+def _cocg_update_stencil(r, psi, a_re, a_im, kind, ih, part, lo, hi):
+    """Planes lo..hi−1: r ← r − α D ψ / h (q = Γ ε p from its potential); part[i1] ← (rᵀr, ‖r‖²)
+    of the plane.
+
+    Real views: r (3, 2N), psi (N1, N2, 2 N3), α = a_re + i a_im (see :func:`_direction_and_eps`);
+    the row gradient is taken on the real values with the wrap of the last voxel outside the
+    loop, which then vectorises."""
+    n1, n2, m = psi.shape
+    n3 = m // 2
     for i1 in range(n1):
         if i1 < lo or i1 >= hi:
             continue
         j1 = i1 + 1 if i1 + 1 < n1 else 0
-        g = np.empty((3, n3), dtype=psi.dtype)
+        g = np.empty((3, m), dtype=psi.dtype)
         rr_re = 0.0
         rr_im = 0.0
         nr = 0.0
         for i2 in range(n2):
             j2 = i2 + 1 if i2 + 1 < n2 else 0
-            _row_grad(psi, kind, i1, i2, j1, j2, g)
-            base = (i1 * n2 + i2) * n3
+            A = psi[i1, i2]
+            B = psi[i1, j2]
+            C = psi[j1, i2]
+            D = psi[j1, j2]
+            if kind == 1:
+                for k in range(m - 2):
+                    _grad_real(A, B, C, D, 1, g, k, k + 2)
+            else:
+                for k in range(m - 2):
+                    _grad_real(A, B, C, D, 2, g, k, k + 2)
+            _grad_real(A, B, C, D, kind, g, m - 2, 0)
+            _grad_real(A, B, C, D, kind, g, m - 1, 1)
+            base = 2 * (i1 * n2 + i2) * n3
             for c in range(3):
-                ah = alpha * ih[c]
-                if update_x:
-                    for i3 in range(n3):
-                        x[c, base + i3] = x[c, base + i3] + alpha * p[c, base + i3]
+                h_re = a_re * ih[c]  # α / h_c
+                h_im = a_im * ih[c]
+                rc = r[c, base:base + m]
+                gc = g[c]
                 for i3 in range(n3):
-                    i = base + i3
-                    v = r[c, i] - ah * g[c, i3]
-                    r[c, i] = v
-                    vr = v.real
-                    vi = v.imag
-                    rr_re += vr * vr - vi * vi
-                    rr_im += 2.0 * vr * vi
-                    nr += vr * vr + vi * vi
+                    g_re = gc[2 * i3]
+                    g_im = gc[2 * i3 + 1]
+                    v_re = rc[2 * i3] - (h_re * g_re - h_im * g_im)
+                    v_im = rc[2 * i3 + 1] - (h_re * g_im + h_im * g_re)
+                    rc[2 * i3] = v_re
+                    rc[2 * i3 + 1] = v_im
+                    rr_re += v_re * v_re - v_im * v_im
+                    rr_im += 2.0 * v_re * v_im
+                    nr += v_re * v_re + v_im * v_im
         part[i1, 0] = rr_re
         part[i1, 1] = rr_im
         part[i1, 2] = nr
@@ -426,8 +534,14 @@ def stencil_gradient(psi, F, kind, ih):
 
 def cocg_update_stencil(x, r, p, psi, alpha, kind, ih, update_x=True):
     """x ← x + α p (if ``update_x``; else x is not touched); r ← r − α D ψ / h. Returns (rᵀr, ‖r‖²)."""
+    real = r.real.dtype
+    alpha = r.dtype.type(alpha)
+    a_re, a_im = real.type(alpha.real), real.type(alpha.imag)
+    if update_x:
+        _split(_axpy, _nchunk(x.shape[1]), x, _real_view(x), _real_view(p), a_re, a_im)
     part = np.zeros((psi.shape[0], 3))
-    _split(_cocg_update_stencil, psi.shape[0], r, x, r, p, psi, alpha, kind, ih, bool(update_x), part)
+    _split(_cocg_update_stencil, psi.shape[0], r, _real_view(r), _real_view(psi), a_re, a_im, kind,
+           np.asarray(ih, dtype=real), part)
     tot = _column_sums(part)
     return complex(tot[0], tot[1]), float(tot[2])
 
