@@ -933,15 +933,24 @@ def test_tracer_transmitting_flakes_white_furnace_and_two_flux():
     f = StackFlake(layers, WAVELENGTHS, 1.0 + 1e-9)
     assert not f.symmetric
     th, tau = 30.0, 1.0
-    c = np.cos(np.radians(th))
-    (Rt, T), (Rb, _) = f(np.array([-c])), f(np.array([c]))
-    exact, single = _flat_flake_layer(Rt[0], Rb[0], T[0], tau)
-    swapped, _ = _flat_flake_layer(Rb[0], Rt[0], T[0], tau)
+    # the reference's R and T straight from Stack (not through StackFlake's face choice and angle table): light
+    # going down meets the layers as listed, light going up the reversed stack
+    from nmmm.layers import Stack
+
+    def rt(lay):
+        r = Stack(lay, ambient=1.0 + 1e-9, substrate=1.0 + 1e-9).rt(WAVELENGTHS, [th])
+        return 0.5 * (np.ravel(r.Rs) + np.ravel(r.Rp)), 0.5 * (np.ravel(r.Ts) + np.ravel(r.Tp))
+
+    (Rt, T), (Rb, _) = rt(list(layers)), rt(list(layers)[::-1])
+    exact, single = _flat_flake_layer(Rt, Rb, T, tau)
+    swapped, _ = _flat_flake_layer(Rb, Rt, T, tau)
     r = trace_coat(th, tau, f, gaussian_tilt(0.5), np.zeros(3), 0.0, 0.0, rho=0.0, n=1.0 + 1e-9, n_photons=200_000,
                    seed=4)
     got, se = r["albedo"] - r["specular"], r["albedo_se"]
-    assert np.all(np.abs(got - exact) < N_SE * se + 1e-3), (got, exact, se)
-    assert np.all(np.abs(r["single_flake"] - single) < N_SE * se + 1e-3), (r["single_flake"], single)
+    # 4 SE + 0.1 % (the file's convention; measured |z| <= 0.8 and <= 1.0); with the faces swapped inside
+    # StackFlake (up-going light meeting the top face) the albedo is 105 / 59 / 6 SE off
+    assert np.all(np.abs(got - exact) < N_SE * se + 1e-3 * exact), (got, exact, se)
+    assert np.all(np.abs(r["single_flake"] - single) < N_SE * se + 1e-3 * single), (r["single_flake"], single)
     assert np.abs(got - swapped)[0] > 10 * se[0], (got, swapped, se)
 
 
