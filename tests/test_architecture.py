@@ -15,7 +15,7 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 ROOT = SRC / "nmmm"
 
 #: the floors, bottom first: a module may import from its own floor and the floors below it
-FLOORS = ("errors", "spectra", "atomic_io", "html_repr", "cluster", "colour", "materials", "ema", "microstructure", "homogenize", "layers",
+FLOORS = ("_tbb_runtime", "errors", "spectra", "atomic_io", "html_repr", "cluster", "colour", "materials", "ema", "microstructure", "homogenize", "layers",
           "ellipsometry", "appearance", "experiment", "recipes", "matching", "demo", "cli")
 MAX_LINES = 800
 

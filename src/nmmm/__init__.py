@@ -32,6 +32,12 @@ def _read_version() -> str:
 
 __version__ = _read_version()
 
+# before anything can launch Numba's threads: the pip ``tbb`` wheel's library made loadable, so the
+# parallel kernels run on the fork- and thread-safe ``tbb`` layer rather than GNU OpenMP (see the module)
+from nmmm._tbb_runtime import load_pip_tbb as _load_pip_tbb
+
+_load_pip_tbb()
+
 _SUBPACKAGES = ("errors", "spectra", "colour", "materials", "ema", "microstructure", "homogenize", "layers",
                 "ellipsometry", "appearance", "experiment", "recipes", "demo")
 
