@@ -1012,7 +1012,7 @@ def test_transmitting_flakes_match_mc(case):
     """Interference flakes that reflect and transmit, in the shipped pearl's coat, against the tracer (3·10^5
     photons per wavelength, θi = 45°): the paint's multiple lobe is the transport's, the one-flake and substrate
     terms (extinction per direction: τ a(μ) (1 − T̄(μ, λ)) / μ, ``_Tables.optical_path``) and the albedo within
-    4 SE + 0.003, every bin within 4 SE + quadrature (MODEL_TOL_BINS). Measured at 4·10^6 (pearl) and 2·10^6
+    4 SE + 0.1 %, every bin within 4 SE + quadrature (MODEL_TOL_BINS). Measured at 4·10^6 (pearl) and 2·10^6
     (TiO2/mica) photons: module docstring, issue 18 (transmitting flakes); interference_paint() at 5·10^5: every
     bin within 2.1 SE, albedo within 0.0005 (its far bins had been 2.4-2.7x the tracer's at 550/650 nm)."""
     paint = _transmitting_paint(case)
@@ -1021,10 +1021,11 @@ def test_transmitting_flakes_match_mc(case):
     a, b, comp = _model_on(paint, ("flakes", "base"))
     for j, lam in enumerate(WAVELENGTHS):
         t = r[lam]
-        tol = N_SE * t["albedo_se"][0] + 0.003
-        assert abs(a[j] - t["albedo"][0]) < tol, (case, lam, a[j], t["albedo"])
-        assert abs(comp["flakes"][j] - t["single_flake"][0]) < tol, (case, lam, comp["flakes"][j], t["single_flake"])
-        assert abs(comp["base"][j] - t["base"][0]) < tol, (case, lam, comp["base"][j], t["base"])
+        # 4 SE + 0.1 % of the value (the file's convention; measured |z| <= 1.5 for all nine, the components
+        # within 0.61 %). The former 4 SE + 0.003 allowed 38 % on TiO2/mica's one-flake term at 550 nm (0.0101)
+        for got, want in ((a[j], t["albedo"][0]), (comp["flakes"][j], t["single_flake"][0]),
+                          (comp["base"][j], t["base"][0])):
+            assert abs(got - want) < N_SE * t["albedo_se"][0] + 1e-3 * want, (case, lam, got, want, t["albedo_se"])
         B, Bse = t["bins"][..., 0], t["bins_se"][..., 0]
         z = np.round((b[..., j] - B) / Bse, 1)
         assert np.all(np.abs(b[..., j] - B) < N_SE * Bse + MODEL_TOL_BINS * B), (case, lam, z)
