@@ -113,6 +113,34 @@ def test_glints_average_to_statistical_flake_brdf(small_metallic_plate):
     assert disc.radiance[..., 40].std() > 5 * stat.radiance[..., 40].std()
 
 
+def test_glints_of_flakes_that_transmit_average_to_statistical_brdf():
+    """The same for interference flakes (interference_paint(τ = 3), TiO2/mica: they transmit
+    most of the red): each glint is dimmed by the flakes above it with the BRDF's extinction
+    per direction (τ a(μ)(1 − T̄(μ, λ))/μ in and out, _Tables.ext_tab), so the rendered mean is
+    the statistical BRDF's (measured 0.99-1.00; 3 % asserted) at 450/550/650 nm. With the mean τ_e
+    the glints made the image 0.91/0.72 (light at 25°) and 0.91/0.81 (50°) of it at 550/650 nm."""
+    from nmmm.appearance.brdf import interference_paint
+    from nmmm.appearance.flakes import FlakeList
+
+    paint = interference_paint(optical_depth=3.0)
+    cell, d_um = 450e3, 5.0
+    n = int(round(3.0 * cell * cell / (np.pi * (d_um * 1e3) ** 2 / 4 * (1 + 0.3 ** 2))))
+    fl = FlakeList.random(paint.flakes.optics, paint.flakes.tilt, n, region_nm=(cell, cell),
+                          mean_diameter_nm=d_um * 1e3, diameter_cv=0.3, depth_range_nm=(2e3, 18e3), n_binder=1.5,
+                          rng=2)
+    plate = PaintedPlate(paint, fl, (40 * 0.45, 30 * 0.45))
+    w = np.array([450.0, 550.0, 650.0])
+    assert not plate.smooth_brdf.prepare(w).tau_e_const  # the flakes transmit
+    for zenith, eye in ((25.0, (0, 40, 430)), (50.0, (0, 120, 400))):
+        light = DirectionalLight.from_angles(zenith, 90.0, 1.0, 1.0)
+        cam = PinholeCamera(eye, (0, 0, 0), fov_deg=2.0, resolution=(96, 64))
+        disc = render_plate(plate, cam, light, wavelength_nm=w, glint_spread_deg=1.5)
+        stat = render_plate(PaintedPlate(plate.smooth_brdf, size_mm=plate.size_mm), cam, light, wavelength_nm=w)
+        assert disc.metadata["n_glints"] > 20000
+        ratio = disc.radiance.mean(axis=(0, 1)) / stat.radiance.mean(axis=(0, 1))
+        assert np.all(np.abs(ratio - 1) < 0.03), (zenith, ratio)
+
+
 def test_glint_positions_shift_between_eyes(small_metallic_plate):
     plate = small_metallic_plate
     light = DirectionalLight.from_angles(20.0, 90.0, "D65", 1.0)

@@ -68,7 +68,9 @@ if _nb is not None:
         """One pass over the visible tiles (rows j in parallel): count (fill=False) or
         write (fill=True) the glint records (pixel, weight, angles, light). ``fpig`` (N,) is
         the fraction of the coat's pigment optical thickness κ above each flake (z0 + dz ζ),
-        recorded as S' fpig (S' = 1/μi' + 1/μo') for the pigments' exp(−κ S' fpig).
+        recorded as S' fpig (S' = 1/μi' + 1/μo') for the pigments' exp(−κ S' fpig). ``rec_th``
+        with 9 columns (flakes that transmit): also θi', θo' (degrees) and ζ/μi', ζ/μo', for the
+        flake layer's extinction per direction (``_Tables.ext_tab``) in the splat.
 
         ``alpha`` > 0: rough flake faces (GGX α, :meth:`~nmmm.appearance.flakes.TiltDistribution.
         roughened`'s law). A flake then reflects through the facet normal h' of the actual
@@ -79,6 +81,7 @@ if _nb is not None:
         normals (J = dω_h/dω_o = cos θo / (4 n² (ωi'·h') cos θo')), cut at δ <= ``rcut``; the
         lobe per external sr is that density times J, the reflectance is taken at ωi'·h'."""
         pix_sa = (2 * tx / W) * (2 * ty / H)
+        ext_cols = rec_th.shape[1] > 5
         nl = lkind.size
         inv2s2 = 1.0 / (2 * sigma * sigma)
         gnorm = 1.0 / (2 * math.pi * sigma * sigma * (1 - math.exp(-0.5 * cut * cut)))
@@ -317,6 +320,10 @@ if _nb is not None:
                                 th2 = 0.0
                                 th3 = 0.0
                                 th4 = 0.0
+                                th5 = 0.0
+                                th6 = 0.0
+                                th7 = 0.0
+                                th8 = 0.0
                                 if fill:
                                     th0 = math.degrees(math.acos(min(1.0, lz)))
                                     th1 = math.degrees(math.acos(min(1.0, fz)))
@@ -325,6 +332,11 @@ if _nb is not None:
                                          + _lerp1_nb(a_tab, math.degrees(math.acos(min(1.0, qz))), astep) / qz)
                                     th3 = S * fzeta[k]
                                     th4 = (1.0 / jz + 1.0 / qz) * fpig[k]
+                                    if ext_cols:  # flakes that transmit: the internal angles, ζ/μi', ζ/μo'
+                                        th5 = math.degrees(math.acos(min(1.0, jz)))
+                                        th6 = math.degrees(math.acos(min(1.0, qz)))
+                                        th7 = fzeta[k] / jz
+                                        th8 = fzeta[k] / qz
                                 if not area:
                                     if fill:
                                         o = base + cnt
@@ -335,6 +347,11 @@ if _nb is not None:
                                         rec_th[o, 2] = th2
                                         rec_th[o, 3] = th3
                                         rec_th[o, 4] = th4
+                                        if ext_cols:
+                                            rec_th[o, 5] = th5
+                                            rec_th[o, 6] = th6
+                                            rec_th[o, 7] = th7
+                                            rec_th[o, 8] = th8
                                         rec_li[o] = li
                                     cnt += 1
                                     continue
@@ -364,6 +381,11 @@ if _nb is not None:
                                             rec_th[o, 2] = th2
                                             rec_th[o, 3] = th3
                                             rec_th[o, 4] = th4
+                                            if ext_cols:
+                                                rec_th[o, 5] = th5
+                                                rec_th[o, 6] = th6
+                                                rec_th[o, 7] = th7
+                                                rec_th[o, 8] = th8
                                             rec_li[o] = li
                                         cnt += 1
                                 if fill and tot > 0.0:

@@ -101,7 +101,8 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     farea = fl.areas_nm2 * 1e-12
     fdiam = np.ascontiguousarray(np.asarray(fl.diameters_nm, float) * 1e-6)
     # attenuation by the flakes above each flake: exp(-τ_e S ζ) with ζ = τ_above / τ, the
-    # same mean-field factor as nmmm.appearance.brdf.flake_list_reflection
+    # same mean-field factor as nmmm.appearance.brdf.flake_list_reflection (flakes that
+    # transmit: ζ times the flake layer's optical depth per direction, _Tables.optical_path)
     if hasattr(fl, "optical_depth_above") and fl.optical_depth > 0:
         fzeta = np.asarray(fl.optical_depth_above(), float) / fl.optical_depth
     else:
@@ -160,13 +161,21 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
     tau_e = np.ascontiguousarray(np.broadcast_to(tab.tau_e, (w.size,)), float)
     flat = img.reshape(-1, w.size)
     const_tau = bool(np.ptp(tau_e) <= 1e-12 * max(1.0, float(tau_e.max())) and not np.any(kappa > 0))
+    # flakes that transmit: the flake layer's extinction per direction, as the BRDF (issue 18) —
+    # the records also carry the internal angles and ζ/μ' (9 columns), the splat reads tab.ext_tab
+    transmit = bool(tab.has_flakes and not tab.tau_e_const)
+    ncol = 9 if transmit else 5
+    ext = np.ascontiguousarray(tab.ext_tab, float)
+    if transmit:
+        const_tau = False
+    max_records = _MAX_RECORDS * 5 // ncol
     # rows of tiles in chunks of at most _MAX_RECORDS glint records (rough faces give every
     # flake of the plate a record: 4e7 for a 15 x 10 cm red metallic, 6 GB at once)
     csum = np.cumsum(counts)
     ja = 0
     while ja < nrow:
         base = csum[ja - 1] if ja > 0 else 0
-        jb = max(int(np.searchsorted(csum, base + _MAX_RECORDS, side="right")), ja + 1)
+        jb = max(int(np.searchsorted(csum, base + max_records, side="right")), ja + 1)
         cnt = counts[ja:jb].copy()
         m = int(cnt.sum())
         if m:
@@ -174,14 +183,14 @@ def _render_glints(plate, camera, lights, spectra, w, sigma, P_on, img, randomiz
             offs[1:] = np.cumsum(cnt)[:-1]
             rec_pix = np.empty(m, np.int64)
             rec_w = np.empty(m)
-            rec_th = np.empty((m, 5))
+            rec_th = np.empty((m, ncol))
             rec_li = np.empty(m, np.int64)
             _glint_tiles(True, offs, rec_pix, rec_w, rec_th, rec_li, cnt, *head, j0 + ja, j0 + jb, *rest)
             srt = np.argsort(rec_pix, kind="stable")
             rec_pix, rec_w, rec_th, rec_li = rec_pix[srt], rec_w[srt], rec_th[srt], rec_li[srt]
             starts = np.flatnonzero(np.r_[True, rec_pix[1:] != rec_pix[:-1], True]).astype(np.int64)
             _glint_splat(flat, starts, rec_pix, rec_w, rec_th, rec_li, np.ascontiguousarray(tab.Tc),
-                         np.ascontiguousarray(tab.Rf), tab.step, tau_e, const_tau, espec, kappa)
+                         np.ascontiguousarray(tab.Rf), tab.step, tau_e, const_tau, espec, kappa, ext)
             del rec_pix, rec_w, rec_th, rec_li, srt
         ja = jb
     return total
