@@ -24,8 +24,9 @@ def flake_list_reflection(paint: PaintBRDF, flakes: FlakeList, wavelength_nm, wi
     of the irradiance on the patch that each flake sends out (N, L) — coat transmission
     in and out, flake reflectance at its local angle, projected area, and mean-field
     attenuation exp(−S τ_above) by the flakes above it (τ_above the flake area above the
-    flake's depth per unit area, :meth:`FlakeList.optical_depth_above`; scaled by τ_e/τ
-    for semi-transparent flakes) — and the mask of flakes whose light leaves the coat.
+    flake's depth per unit area, :meth:`FlakeList.optical_depth_above`; for flakes that
+    transmit S is the paint's extinction per direction, a(μ)(1 − T̄(μ, λ))/μ in and out, the
+    BRDF's ``_Tables.optical_path`` / τ) — and the mask of flakes whose light leaves the coat.
     Because Σ_k A_k exp(−S τ_above,k) / area → (1 − e^{−Sτ})/S whatever the depth
     distribution, the mean of the discrete flakes is the statistical flake lobe.
     The average of these contributions over many flakes is the ``"flakes"`` term of the
@@ -56,13 +57,19 @@ def flake_list_reflection(paint: PaintBRDF, flakes: FlakeList, wavelength_nm, wi
     else:
         a_tab = np.asarray(tilt.projected_mean(np.cos(np.radians(np.linspace(0.0, 90.0, _NT)))), float)
     opz = np.clip(op[:, 2], 1e-6, 1)
-    S = _lerp1(a_tab, np.atleast_1d(_deg(ip[2])), tab.step)[0] / ip[2] + _lerp1(a_tab, _deg(opz), tab.step) / opz
-    if paint.flakes is not None:
-        # τ_e/τ from the paint's tables (semi-transparent flakes)
-        ratio = tab.tau_e / tab.tau if tab.tau > 0 else np.ones(tab.L)
+    if paint.flakes is not None and tab.has_flakes and not tab.tau_e_const:
+        # flakes that transmit: the paint's flake-layer optical depth along μi' and μo' per unit τ
+        # (τ a(μ) (1 − T̄(μ, λ)) / μ, the BRDF's _Tables.optical_path), times the depth τ_above
+        X = (tab.optical_path(np.atleast_1d(ip[2])) + tab.optical_path(opz)) / tab.tau  # (N, L)
+        att = np.exp(-tau_above[:, None] * X)
     else:
-        ratio = np.ones(tab.L)
-    att = np.exp(-np.outer(S * tau_above, ratio))
+        S = _lerp1(a_tab, np.atleast_1d(_deg(ip[2])), tab.step)[0] / ip[2] + _lerp1(a_tab, _deg(opz), tab.step) / opz
+        if paint.flakes is not None:
+            # τ_e/τ from the paint's tables (semi-transparent flakes)
+            ratio = tab.tau_e / tab.tau if tab.tau > 0 else np.ones(tab.L)
+        else:
+            ratio = np.ones(tab.L)
+        att = np.exp(-np.outer(S * tau_above, ratio))
     area = flakes.region_nm[0] * flakes.region_nm[1]
     power = (flakes.areas_nm2 * np.abs(c) / ip[2] / area)[:, None] * R * att * Ti * To
     power[~esc] = 0.0
