@@ -316,7 +316,8 @@ def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_sprea
         lobe_factor = np.where(p_w > 0, I1 / np.where(p_w > 0, p_w, 1.0), 1.0)
     N = np.where(I2 > 0, n_a * A * I1 * I1 / np.where(I2 > 0, I2, 1.0), 0.0)
     lam = n_a * A * I0
-    # weights a_k exp(-τ_e S ζ_k) at each pixel's path factor S
+    # weights a_k exp(-τ_e S ζ_k) at each pixel's path factor S (flakes that transmit: the
+    # optical depth per direction in place of τ_e S, below)
     a = np.asarray(flakes.areas_nm2, float) * 1e-12
     zeta = _depth_fraction(flakes)
     tau_e = float(np.mean(tab.tau_e))
@@ -329,7 +330,13 @@ def glint_footprint_statistics(paint, flakes, wi, wo, footprint_mm2, glint_sprea
     kappa = float(np.mean(getattr(tab, "kappa", 0.0)))
     S2 = 1.0 / np.maximum(ip[..., 2], 1e-9) + 1.0 / np.maximum(op[..., 2], 1e-9)
     # moments over the flakes: Σ a e^{-x ζ}, Σ a² e^{-2 x ζ} on a grid of x = τ_e S + κ dz S'
-    x = tau_e * S + kappa * float(getattr(tab, "dz", 1.0)) * S2
+    if tab.has_flakes and not tab.tau_e_const:
+        # flakes that transmit: τ_e S is the BRDF's extinction per direction (issue 18),
+        # τ a(μ)(1 − T̄(μ))/μ in and out (_Tables.optical_path, at this one wavelength)
+        xf = (tab.optical_path(ip[..., 2].ravel()) + tab.optical_path(op[..., 2].ravel()))[:, 0].reshape(S.shape)
+    else:
+        xf = tau_e * S
+    x = xf + kappa * float(getattr(tab, "dz", 1.0)) * S2
     xs = np.linspace(float(x.min()), float(x.max()), 33) if x.size else np.zeros(1)
     m1 = np.array([np.mean(a * np.exp(-v * zeta)) for v in xs])
     m2 = np.array([np.mean((a * np.exp(-v * zeta)) ** 2) for v in xs])
