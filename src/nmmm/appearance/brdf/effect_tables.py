@@ -185,7 +185,10 @@ class _EffectTables(_Tables):
                  + _lerp1(self.a_tab, _deg(op[:, 2]), self.step) / op[:, 2])
         else:
             S = np.zeros(P)
-        Xf = self.optical_path(ip[:, 2]) + self.optical_path(op[:, 2]) if self.has_flakes else np.outer(S, self.tau_e)
+        if self.has_flakes and not self.tau_e_const:  # flakes that transmit: per direction and λ
+            Xf = self.optical_path(ip[:, 2]) + self.optical_path(op[:, 2])
+        else:  # opaque flakes: τ_e S, bit for bit as before issue 18
+            Xf = np.outer(S, self.tau_e)
         X = Xf + np.outer(S2, self.kappa) * self.dz
         eX = np.exp(-Xf) * _s2_lerp(self._Qd, S2, self._s2_step)  # e^−X, as the kernel
         if self.has_flakes and "flakes" in comps:
@@ -304,9 +307,9 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
                 _lobe_at_wavelengths_nb(C, ai0, fai, ao0, fao, cphi, seg, lw, sk, sl)
             o = out[p]
             for l in range(L):  # few branches, all the same for every l
+                x = tau_e[l] * S + kd[l] * S2  # opaque flakes (as before issue 18: the same compiled code)
                 e = Qd[js, l] * (1.0 - fs) + Qd[js + 1, l] * fs
                 if tau_e_const:
-                    x = tau_e[l] * S + kd[l] * S2
                     e *= e_t0
                 else:
                     xf = ((ext[ki, l] * (1.0 - fki) + ext[ki + 1, l] * fki) * inv_i

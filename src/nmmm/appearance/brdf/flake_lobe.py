@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nmmm.appearance.brdf.interpolation import _deg, _lerp_table, _phi_mean
+from nmmm.appearance.brdf.interpolation import _deg, _lerp1, _lerp_table, _phi_mean
 from nmmm.appearance.flakes import refract_in, refract_out
 
 
@@ -88,8 +88,14 @@ def flake_single_scattering_albedo(tab, mua, n_theta: int = 24, n_phi: int = 32)
         ck, opk, wok, wk = ck[ok], op[ok], wok[ok], wq[ok]
         To = _lerp_table(tab.Tc, _deg(wok[:, 2]), tab.step)
         kap = getattr(tab, "kappa", None)
-        # the flake layer's optical depth in and out (flakes that transmit: per direction and λ)
-        X = tab.optical_path(np.array([ip[2]])) + tab.optical_path(opk[:, 2])  # (K, L)
+        # the flake layer's optical depth in and out (flakes that transmit: per direction and λ); opaque
+        # flakes τ_e S as before issue 18, so that their tables stay bit for bit ((a + b) τ_e, not a τ_e + b τ_e)
+        if tab.tau_e_const:
+            S = (_lerp1(tab.a_tab, _deg(ip[2]), tab.step) / ip[2]
+                 + _lerp1(tab.a_tab, _deg(opk[:, 2]), tab.step) / opk[:, 2])
+            X = np.outer(S, tab.tau_e)
+        else:
+            X = tab.optical_path(np.array([ip[2]])) + tab.optical_path(opk[:, 2])  # (K, L)
         if kap is None:  # no pigmented medium: the same attenuation for both
             phi = tab.tau * _phi_mean(X)  # (K, L)
             phi0 = phi
