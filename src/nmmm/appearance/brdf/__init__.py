@@ -36,8 +36,10 @@ The BRDF is the sum of four terms (all reciprocal, f(wi, wo) = f(wo, wi)):
    (interference) flakes let light through unscattered: τ_e a(u)/μ becomes τ a(μ)(1 − T̄(μ, λ))/μ,
    T̄(μ) their transmission averaged over the normals a ray along u meets (issue 18: with the
    hemispherical mean T̄ for every direction a TiO2/mica paint was 0.04 too bright against the
-   photon tracer of tests/appearance/test_brdf_montecarlo.py; the sparkle and glint paths keep the
-   mean τ_e = τ (1 − T̄)).
+   photon tracer of tests/appearance/test_brdf_montecarlo.py). The discrete flakes
+   (:func:`flake_list_reflection`), the plate renderer's glints and the sparkle prediction dim
+   each flake by the flakes above it with the same extinction per direction
+   (``_Tables.optical_path`` / ``ext_tab``).
 3. **diffuse base** — the base reflects diffusely (Lambertian inside the binder), seen
    through the flakes (transmission t(u) = exp(−τ_e a(u)/μ)) and the coat, with the
    internal reflections at the coat/air interface summed as a geometric series:
