@@ -8,7 +8,8 @@ roughness, cut at 3σ_g) around f, so flake k adds X_k = K w_k g(∠(f_k, ωo)) 
 radiance, with K the same for all flakes of the pixel (irradiance, coat transmission in
 and out, flake reflectance, 1/(A cos θo)) and w_k = a_k exp(−τ_e S ζ_k) its own weight
 (area a_k, mean-field attenuation by the flakes above it, ζ_k its optical-depth fraction,
-S the path factor of :func:`nmmm.appearance.brdf.flake_list_reflection`); in a pigmented
+S the path factor of :func:`nmmm.appearance.brdf.flake_list_reflection`; for flakes that
+transmit τ_e S is the BRDF's optical depth per direction, τ a(μ)(1 − T̄(μ))/μ in and out); in a pigmented
 basecoat (:class:`~nmmm.appearance.brdf.CoatMedium`, optical thickness κ = (μa + μs) H,
 flakes in the band z0 … z0 + dz) also exp(−κ S' (z0 + dz ζ_k)), S' = 1/μi' + 1/μo' —
 the same per-flake form whose mean is the statistical term's

@@ -65,7 +65,7 @@ def flake_list_reflection(paint: PaintBRDF, flakes: FlakeList, wavelength_nm, wi
     else:
         S = _lerp1(a_tab, np.atleast_1d(_deg(ip[2])), tab.step)[0] / ip[2] + _lerp1(a_tab, _deg(opz), tab.step) / opz
         if paint.flakes is not None:
-            # τ_e/τ from the paint's tables (semi-transparent flakes)
+            # τ_e/τ from the paint's tables (opaque flakes: 1)
             ratio = tab.tau_e / tab.tau if tab.tau > 0 else np.ones(tab.L)
         else:
             ratio = np.ones(tab.L)
