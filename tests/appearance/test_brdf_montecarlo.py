@@ -1035,14 +1035,15 @@ def test_transmitting_flakes_match_mc(case):
 @pytest.mark.parametrize("case", ["Fe2O3/mica pearl", "TiO2/mica"])
 def test_transmitting_flakes_match_mc_at_1e6_photons(case):
     """The comparison behind the lobe rule of ms_azimuth.lobe_tables at 10^6 photons per wavelength (bin SE
-    ≤ 1.3 %): every bin within 4 SE + quadrature and the albedo within 4 SE + 0.001 with the transport's lobe
+    ≤ 1.3 %): every bin within 4 SE + quadrature and the albedo within 4 SE + 0.1 % with the transport's lobe
     (module docstring: the table for both lobes)."""
     paint = _transmitting_paint(case)
     r = _trace_transmitting(paint, 1_000_000, seed=640 if case.startswith("Fe") else 740)
     a, b, _ = _model_on(paint)
     for j, lam in enumerate(WAVELENGTHS):
         t = r[lam]
-        assert abs(a[j] - t["albedo"][0]) < N_SE * t["albedo_se"][0] + 1e-3, (case, lam, a[j], t["albedo"])
+        tol = N_SE * t["albedo_se"][0] + 1e-3 * t["albedo"][0]
+        assert abs(a[j] - t["albedo"][0]) < tol, (case, lam, a[j], t["albedo"])
         B, Bse = t["bins"][..., 0], t["bins_se"][..., 0]
         z = np.round((b[..., j] - B) / Bse, 1)
         assert np.all(np.abs(b[..., j] - B) < N_SE * Bse + MODEL_TOL_BINS * B), (case, lam, z)
