@@ -478,6 +478,7 @@ def trace_coat(theta_i_deg, tau, nk_metal, tilt, kappa_a, kappa_s, g, band=(0.0,
     n_coat = np.zeros(N, int)
     esc_single = np.zeros(L)
     esc_base = np.zeros(L)
+    esc_ms = np.zeros((N, L))  # per photon, the light of the model's "multiple" term (for its standard error)
     esc_bins = np.zeros((N, nb_t, nb_p, L)) if nb_t and nb_p else None
     # the bins split as the model's terms: one flake and nothing else, no flake and no pigment, the rest
     part_bins = np.zeros((2, N, nb_t, nb_p, L)) if esc_bins is not None and split_bins else None
@@ -547,6 +548,7 @@ def trace_coat(theta_i_deg, tau, nk_metal, tilt, kappa_a, kappa_s, g, band=(0.0,
             none = (n_flake[gk] == 0) & (n_pig[gk] == 0)
             esc_single += out_w[one].sum(axis=0)
             esc_base += out_w[none].sum(axis=0)
+            esc_ms[gk[~(one | none)]] += out_w[~(one | none)]
             n_coat[gk] += 1
             if esc_bins is not None and np.any(ok):
                 th_o = np.arccos(mu_o)
@@ -580,6 +582,7 @@ def trace_coat(theta_i_deg, tau, nk_metal, tilt, kappa_a, kappa_s, g, band=(0.0,
         "single_flake": esc_single / N,
         "base": esc_base / N,
         "multiple": esc_total.mean(axis=0) - (esc_single + esc_base) / N,
+        "multiple_se": esc_ms.std(axis=0) / np.sqrt(N),
         "transmissions": n_trans.mean(),
     }
     if esc_bins is not None:
@@ -1057,11 +1060,16 @@ def test_transmitting_flakes_match_mc_at_1e6_photons(case):
     "independent of angle (the model's extinction then exact) the amount was 0.82 / 0.89 / 0.96 with its one-flake "
     "and substrate terms exact: F_ms's directional amount (1 − E⁰(θi)) F_ms for weakly reflecting flakes in a "
     "narrow-tilt coat. A small term (0.8 / 1.7 / 5.6 % of the albedo; the one-flake and substrate terms within "
-    "0.5 %): the bins of the total pass (test above)"))
+    "0.5 %): the bins of the total pass (test above). Against the multiple term's own standard error (per photon, "
+    "``multiple_se``: 3e-6 / 1e-5 / 6.3e-5) the differences are -60 / -33 / -7.5 SE"))
 def test_transmitting_flakes_multiple_amount():
-    """The multiple term (hemispherically integrated, θi = 45°) within 5 % of the tracer's for the pearl."""
+    """The multiple term (hemispherically integrated, θi = 45°) within 4 SE + 0.1 % of the tracer's for the pearl
+    (the file's convention, SE of the multiple term itself; a 5 % band, as first written, sat inside the
+    albedo's SE at 450 nm and could not tell)."""
     paint = _transmitting_paint("Fe2O3/mica pearl")
     r = _trace_transmitting(paint, 1_000_000, seed=640)
     _, _, comp = _model_on(paint, ("multiple",))
     mc_ms = np.array([r[lam]["multiple"][0] for lam in WAVELENGTHS])
-    assert np.all(np.abs(comp["multiple"] / mc_ms - 1.0) < 0.05), comp["multiple"] / mc_ms
+    se = np.array([r[lam]["multiple_se"][0] for lam in WAVELENGTHS])
+    assert np.all(np.abs(comp["multiple"] - mc_ms) < N_SE * se + 1e-3 * mc_ms), (comp["multiple"] / mc_ms,
+                                                                                  (comp["multiple"] - mc_ms) / se)
