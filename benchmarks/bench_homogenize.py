@@ -5,6 +5,8 @@ What it reports
 1. Cost of one COCG iteration against the bare FFT pair a user would write: a vector field
    (d components) forward and back with scipy.fft (2 workers, in place). nmmm's iteration does
    d forward FFTs and one inverse (the Willot operators' rank-one form). Target: ratio <= 1.3.
+   Here x is not formed (``keep_x=False``, as ``fft_permittivity`` solves one loading: no x
+   pass); ``run_all.py``'s FFT row forms it (one more pass: read x and p, write x).
 2. Projections (iterations) against contrast for COCG (default), BiCGStab, GMRES,
    Eyre-Milton and the basic Moulinec-Suquet scheme, with the three Green operators, on a
    2-D Boolean model (metal ε = −50 + {20, 5, 1}i in ε = 2.25) and a 3-D one (64³, −50 + 2i).
@@ -20,6 +22,36 @@ Usage::
 
 The machine's cores are shared: ratios measured in the same run are meaningful, absolute
 times less so.
+
+Session 6, 2026-12-05: the element-wise passes vectorise (issue 22; 128³ complex64, willot2015, x formed)
+-------------------------------------------------------------------------------------
+Per pass, medians of 7-9 timed in alternation in one process (ms; "pair" = one bare FFT pair):
+- before, 1 thread (load 0.4-0.9): direction + ε 23.9-24.2, 3 forward FFTs 49.8-50.8, potential
+  7.0-7.8, inverse FFT 14.0-16.3, stencil update (x and r) 23.3-23.7; iteration 117-121, pair
+  96-102: 1.17-1.26. 2 threads (load 0.4-1.2): 12.8-14.0, 25.3-26.6, 4.1, 7.8-7.9, 12.1-12.5;
+  iteration 64, pair 49-52: 1.25-1.31. Every pass ran on both threads (speed-ups 1.7-2.1); no
+  pass was serial. The excess was the element-wise passes (55 of 121 ms at 1 thread), whose
+  complex64 loops Numba left scalar (and the ε gather in the direction loop).
+- after (kernels on real views, kernels.py), 1 thread (load 0.9-1.7): direction 12.9-13.1,
+  potential 7.3, update 14.9-15.2 (x pass 6-7 of it); iteration 100-119, pair 98-102: 1.02-1.16.
+  2 threads (load 1.1-1.7): 7.7-9.2, 4.5-4.7, 7.8-8.0; 4 FFTs 31-32; iteration 53, pair 48:
+  1.10-1.11.
+- run_all's measure (pair = 8 pairs in a row, old and new kernels interleaved in one process):
+  1 thread old 1.19-1.58, new 0.97-1.17; 2 threads old 1.05-1.66, new 0.92-1.32 (load 1.6-3.7
+  all session: one or two other jobs on the 2 cores; the 2-thread rows with a pair slower than
+  at 1 thread had no second core). ``run_all.py --only fft`` twice at load 1.5-3.9: 1 thread
+  1.22, 1.37; 2 threads 1.16, 1.14 — at this load the row moves by ±0.15 between runs. The
+  target <= 1.3 at 2 threads is met on a machine with a free second core (1.10-1.11 per pass,
+  1.13-1.32 in run_all's measure at load 1.7-2.3), not reliably under load. The pair in a loop is faster (42-43 ms at 2 threads) than one
+  pair among the iteration's passes (47-48): its single 48 MiB field stays in cache, the
+  iteration streams over x, r, p, q and ψ (~210 MiB).
+- Floor of the element-wise passes: Numba streaming loops with the same traffic (real views,
+  same chunks and threads; load 1.5): direction's (read 2, write 2 fields) 10.9 / 5.4 ms at 1 / 2
+  threads, x update's (read 2, write 1) 4.8 / 2.5, one field read and written 2.9 / 1.4 (NumPy
+  copyto 5.9 / 5.3: one thread). Memory bandwidth still doubles at 2 threads, so it is no floor
+  here; the passes are at 1.2-1.7x their traffic floor (direction) and the whole element-wise
+  work at ~1.5x (about 22 ms at 2 threads against ~12): with the FFTs at 31-32 ms and the pair
+  at 42-48 the floor ratio is ~0.95-1.05.
 
 Session 5, 2026-12-04: why 2 threads did not scale (issue 22; 128³ complex64, willot2015)
 -------------------------------------------------------------------------------------
