@@ -636,19 +636,32 @@ def test_opaque_flakes_keep_the_tau_e_extinction_path():
             del tab.optical_path
 
 
-def test_transmitting_flakes_in_a_pigmented_coat_kernel_equals_numpy_path():
-    """Flakes that transmit in a pigmented coat (the effect kernel): the flake layer's transmission in
-    and out is the table exp(−τ a(μ) (1 − T̄(μ, λ)) / μ) on the 0.5° angle nodes, interpolated
-    (``_EffectTables._ext_exp``: no exp per pair and wavelength; the wavelength loop vectorises).
-    Physics: the interpolated table is within 1e-5 relative of the exponential of
-    the interpolated optical path over the escape cone (measured 1.9e-6 on the BRDF); the kernel
-    equals the NumPy path (1e-9, float32 1e-6) and stays reciprocal (1e-10)."""
+def _pigmented_pearl(w):
+    from nmmm.appearance.brdf import CoatMedium
+
+    med = CoatMedium(w, 2e-4 * np.exp(-((w - 480.0) / 60.0) ** 2) + 1e-6, 3e-5, 0.5, 2e4)
+    return interference_paint().with_(medium=med)
+
+
+@pytest.mark.parametrize("coat", ["pigmented", "plain"])
+def test_transmitting_flakes_kernel_equals_numpy_path(coat):
+    """Flakes that transmit, in a pigmented coat (the effect kernel) and in a plain one (the fused
+    kernel, ``fused_kernel._kernel``): the flake layer's transmission in and out is the table
+    exp(−τ a(μ) (1 − T̄(μ, λ)) / μ) on the 0.5° angle nodes, interpolated (``_Tables._ext_exp``, one
+    table for both kernels and both NumPy paths: no exp per pair and wavelength; the wavelength
+    loop vectorises). Physics: the interpolated table is within 1e-5 relative of the exponential
+    of the interpolated optical path over the escape cone (measured 1.9e-6 on the pigmented coat's
+    BRDF; plain TiO2/mica: 6e-6 at the critical angle, 1e-7 below 41.5°); the kernel equals the
+    NumPy path (1e-9, float32 1e-6) and stays reciprocal (1e-10)."""
+    from nmmm.appearance.brdf.effect_tables import _EffectTables
+    from nmmm.appearance.brdf.tables import _Tables
+
     w = np.linspace(380.0, 780.0, 41)
-    med = __import__("nmmm.appearance.brdf", fromlist=["CoatMedium"]).CoatMedium(
-        w, 2e-4 * np.exp(-((w - 480.0) / 60.0) ** 2) + 1e-6, 3e-5, 0.5, 2e4)
-    paint = interference_paint().with_(medium=med)
+    paint = _pigmented_pearl(w) if coat == "pigmented" else interference_paint()
     tab = paint.prepare(w)
     assert not tab.tau_e_const
+    assert type(tab) is (_EffectTables if coat == "pigmented" else _Tables)
+    assert _EffectTables._ext_exp is _Tables._ext_exp
     mu = np.cos(np.radians(np.linspace(0.0, 41.8, 400)))
     e_tab = _lerp_table_for_test(tab._ext_exp(), mu, tab.step)
     np.testing.assert_allclose(e_tab, np.exp(-tab.optical_path(mu)), rtol=1e-5)
@@ -659,6 +672,9 @@ def test_transmitting_flakes_in_a_pigmented_coat_kernel_equals_numpy_path():
     v /= np.linalg.norm(v, axis=-1, keepdims=True)
     f = paint(w, v[0], v[1])
     np.testing.assert_allclose(f, paint(w, v[0], v[1], method="numpy"), rtol=1e-9, atol=1e-14)
+    for comps in (("flakes",), ("base",)):
+        np.testing.assert_allclose(paint(w, v[0], v[1], components=comps),
+                                   paint(w, v[0], v[1], components=comps, method="numpy"), rtol=1e-9, atol=1e-14)
     np.testing.assert_allclose(paint(w, v[0], v[1], dtype=np.float32), f, rtol=1e-6, atol=1e-30)
     np.testing.assert_allclose(paint(w, v[1], v[0]), f, rtol=1e-10, atol=1e-14)
 

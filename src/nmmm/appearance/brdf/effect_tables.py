@@ -161,24 +161,6 @@ class _EffectTables(_Tables):
                        np.ascontiguousarray(self.Dms), Kms, C, _node_runs(lk, C.shape[2]), lw.astype(float),
                        "specular" in comps, "flakes" in comps and self.has_flakes, do_ms, _CHUNK_PAIRS)
 
-    def _ext_exp(self):
-        """exp(−τ a(μ) (1 − T̄(μ, λ)) / μ) on the angle nodes of ``ext_tab`` (NT, L): the flake layer's
-        transmission along each internal direction, interpolated by the kernel for flakes that transmit
-        instead of an exp per pair and wavelength (no SVML: a libm call each, 81·10^6 for 10^6 pairs).
-        Linear interpolation of the exponential (nodes 0.5° apart; internal θ ≤ 41.8° at n = 1.5): the
-        pearl's coat with a red pigment within 1.9e-6 relative of the exponential of the interpolated path.
-        The NumPy path (``evaluate``) interpolates the same table."""
-        e = getattr(self, "_ext_exp_tab", None)
-        if e is None:
-            if self.has_flakes and not self.tau_e_const:
-                mu = np.cos(np.radians(np.arange(self.ext_tab.shape[0]) * self.step))
-                with np.errstate(divide="ignore", over="ignore"):
-                    e = np.exp(-self.ext_tab / np.maximum(mu, 1e-300)[:, None])
-            else:
-                e = np.zeros((2, self.L))
-            self._ext_exp_tab = e = np.ascontiguousarray(e, float)
-        return e
-
     def evaluate(self, wi, wo, comps):
         P, L = wi.shape[0], self.L
         mi, mo = wi[:, 2], wo[:, 2]
@@ -247,7 +229,7 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
     """The terms of the module docstring per pair, one loop over wavelengths; the flake layer's
     extinction τ_e S for opaque flakes (``tau_e_const``), else from ``ext`` (NT, L) = τ a(μ) (1 − T̄(μ, λ))
     per internal direction (``_Tables.optical_path``) and ``eext`` = exp(−ext/μ) on the same nodes
-    (``_EffectTables._ext_exp``: the transmission in and out interpolated, no exp per wavelength)."""
+    (``_Tables._ext_exp``: the transmission in and out interpolated, no exp per wavelength)."""
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]

@@ -43,13 +43,14 @@ else:  # pragma: no cover
     _angle_pos_nb = _angle_pos
 
 
-def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, ext, kb, Dms, Kms,
-               do_spec, do_flakes, do_base, do_ms, tau_e_const):
+def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, ext, eext, kb, Dms,
+               Kms, do_spec, do_flakes, do_base, do_ms, tau_e_const):
     """Per pair the geometry (table positions and per-pair weights) first, then one branch-free
     loop over wavelengths (the terms a paint lacks enter with weight 0, ``Rf`` then a (2, L)
     table of zeros), so that the wavelength loop vectorises. Opaque flakes (``tau_e_const``):
     extinction τ_e S; flakes that transmit: ``ext`` (NT, L) = τ a(μ) (1 − T̄(μ, λ)) along each
-    internal direction (``_Tables.optical_path``)."""
+    internal direction (``_Tables.optical_path``) and ``eext`` = exp(−ext/μ) on the same nodes
+    (``_Tables._ext_exp``: the transmission in and out interpolated, no exp per wavelength)."""
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
@@ -143,7 +144,8 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
             for l in range(L):
                 x = ((ext[ki, l] * (1.0 - fki) + ext[ki + 1, l] * fki) * inv_i
                      + (ext[ko, l] * (1.0 - fko) + ext[ko + 1, l] * fko) * inv_o)
-                e = np.exp(-x)
+                e = ((eext[ki, l] * (1.0 - fki) + eext[ki + 1, l] * fki)
+                     * (eext[ko, l] * (1.0 - fko) + eext[ko + 1, l] * fko))
                 ph = 1.0 - 0.5 * x if x < 1e-6 else (1.0 - e) / x
                 tt = (Tc[i0, l] * gi + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * go + Tc[o0 + 1, l] * fo) * inv_n2
                 out[p, l] = (spec_w * (Fs[d0, l] * gd + Fs[d0 + 1, l] * fd)

@@ -94,6 +94,25 @@ class _Tables:
         unit τ along θ relative to opaque flakes' a(μ)/μ (transmitted light is not scattered)."""
         return 1.0 - _lerp_table(self.T_dir, np.asarray(theta_deg, float), self.step)
 
+    def _ext_exp(self):
+        """exp(−τ a(μ) (1 − T̄(μ, λ)) / μ) on the angle nodes of ``ext_tab`` (NT, L): the flake layer's
+        transmission along each internal direction, interpolated by both kernels (``fused_kernel`` and
+        the effect kernel) and both NumPy paths for flakes that transmit instead of an exp per pair and
+        wavelength (no SVML: a libm call each, 81·10^6 for 10^6 pairs). Linear interpolation of the
+        exponential (nodes 0.5° apart; internal θ ≤ 41.8° at n = 1.5): the pearl's coat with a red
+        pigment within 1.9e-6 relative of the exponential of the interpolated path. A (2, L) table of
+        zeros for opaque flakes (the kernels do not read it)."""
+        e = getattr(self, "_ext_exp_tab", None)
+        if e is None:
+            if self.has_flakes and not self.tau_e_const:
+                mu = np.cos(np.radians(np.arange(self.ext_tab.shape[0]) * self.step))
+                with np.errstate(divide="ignore", over="ignore"):
+                    e = np.exp(-self.ext_tab / np.maximum(mu, 1e-300)[:, None])
+            else:
+                e = np.zeros((2, self.L))
+            self._ext_exp_tab = e = np.ascontiguousarray(e, float)
+        return e
+
     def _ggx_albedo(self, mu_nodes, n_u=64, n_phi=64):
         a = self.alpha
         x, wx = np.polynomial.legendre.leggauss(n_u)
@@ -220,9 +239,16 @@ class _Tables:
             kb = np.zeros(self.L)
         _kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
                 self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
-                np.ascontiguousarray(self.tau_e, float), self.ext_tab, kb, self.Dms, np.asarray(self.Kms, float),
+                np.ascontiguousarray(self.tau_e, float), self.ext_tab, self._ext_exp(), kb, self.Dms,
+                np.asarray(self.Kms, float),
                 "specular" in comps, "flakes" in comps and self.has_flakes, do_base, do_ms,
                 bool(self.tau_e_const))
+
+    def _eX(self, ip, op):
+        """The flake layer's transmission in and out, exp(−X) for flakes that transmit, from the table
+        :meth:`_ext_exp` interpolated at the internal directions ip, op (P, 3) -> (P, L), as the kernels."""
+        et = self._ext_exp()
+        return _lerp_table(et, _deg(ip[:, 2]), self.step) * _lerp_table(et, _deg(op[:, 2]), self.step)
 
     def evaluate(self, wi, wo, comps):
         P = wi.shape[0]
@@ -265,16 +291,18 @@ class _Tables:
                 if self.tau_e_const:
                     g = g * _phi_mean(S * self.tau_e[0])
                     sub += g[:, None] * _lerp_table(self.Rf, _deg(cd), self.step)
-                else:
+                else:  # flakes that transmit: e^−X from the table of the transmission in and out, as the kernel
                     X = self.optical_path(ip[:, 2]) + self.optical_path(op[:, 2])
-                    sub += g[:, None] * _phi_mean(X) * _lerp_table(self.Rf, _deg(cd), self.step)
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        ph = np.where(X < 1e-6, 1.0 - 0.5 * X, (1.0 - self._eX(ip, op)) / X)
+                    sub += g[:, None] * ph * _lerp_table(self.Rf, _deg(cd), self.step)
             if "base" in comps and np.any(self.rho > 0):
                 kb = self.rho / (np.pi * (1 - self.rho * self.r_t))
                 if self.has_flakes:
                     if self.tau_e_const:
                         sub += np.exp(-(ai + ao) * self.tau_e[0])[:, None] * kb
                     else:
-                        sub += np.exp(-(self.optical_path(ip[:, 2]) + self.optical_path(op[:, 2]))) * kb
+                        sub += self._eX(ip, op) * kb
                 else:
                     sub += kb
             f += TT * sub
