@@ -142,7 +142,8 @@ def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int 
     sel = np.unique(np.linspace(0, L - 1, min(L, max(n_probe, n_nodes))).round().astype(int))
     th, mu, sn, dmu = gauss_nodes(n_mu, n)
     G = flake_kernels(tab, mu, sn, dmu, n_modes)[..., sel]  # (M+1, up/down, actual/lossless, j, k, K)
-    eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu  # (k,) extinction per unit τ, × τ_e/τ
+    eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu  # (k,) a(μ)/μ, opaque flakes' extinction per unit τ
+    # × (1 − T̄(μ, λ)) per direction (extinction_ratio; 1 for opaque flakes): the extinction per unit τ
     target = eps[:, None] * tab.extinction_ratio(np.degrees(th))[:, sel]  # (k, K)
     # the kernel is renormalised as in multiple_scattering_factor (lossless column = target)
     col0 = G[0, :, 1].sum(axis=(0, 1))

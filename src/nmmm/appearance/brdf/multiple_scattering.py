@@ -31,7 +31,9 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, 
     transmission matrices come from adding–doubling (van de Hulst 1980) of a thin
     sublayer whose kernel is the oriented-mirror scattering per unit optical depth,
     p(h) R(|u·h|) / (4 μ_in) into upward *and* downward directions (flake–flake paths
-    included), with extinction τ_e/τ · a(μ)/μ; the Lambertian base (ρ) is added
+    included), with extinction a(μ)/μ · (1 − T̄(μ, λ)) per unit τ along each direction
+    (``_Tables.extinction_ratio``: light the flakes transmit is not scattered; a(μ)/μ for
+    opaque flakes); the Lambertian base (ρ) is added
     below, and the coat from below transmits T out of the escape cone and mirrors the
     rest back down. For diffuse light entering the coat this gives the total escaping
     fraction e(λ) (1 exactly for the lossless paint); removing the single-scattering
@@ -62,8 +64,8 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, 
             dc = _deg(c.ravel())
             G[s_out, 0] += wgt[..., None] * _lerp_table(tab.Rf, dc, tab.step).reshape(wgt.shape + (L,))
             G[s_out, 1] += wgt[..., None] * _lerp_table(tab.Rf0, dc, tab.step).reshape(wgt.shape + (L,))
-    # the lossless kernel removes exactly τ_e/τ · a/μ per unit τ (corrects the quadrature)
-    target = a_mu[:, None] * tab.extinction_ratio(np.degrees(th))  # (k, L): transmission per direction
+    # the lossless kernel removes exactly a(μ)/μ · (1 − T̄(μ, λ)) per unit τ (corrects the quadrature)
+    target = a_mu[:, None] * tab.extinction_ratio(np.degrees(th))  # (k, L): extinction per unit τ per direction
     col0 = (G[0, 1] + G[1, 1]).sum(axis=0)
     scale = np.where(col0 > 0, target / np.where(col0 > 0, col0, 1.0), 0.0)
     eye = np.eye(n_mu)
