@@ -325,6 +325,17 @@ def _multiangle(recipe, brdf, w, res, add_spectra: bool):
     return g
 
 
+def _realisation_note(r: dict) -> str:
+    """The deposit cell's own statistics (± SE) beside the ensemble values the colour uses."""
+    if "optical_depth_cell" not in r:
+        return ""
+    full = r.get("band_realisations_refused", 0)
+    full = f", {full} more overflowing the coat: it is near full" if full else ""
+    return (f" (band top ± {r['band_top_se']:.2g}, mean of {r['band_realisations']} deposits{full}); the cell's "
+            f"{r['n_flakes_in_cell']} flakes: τ = {r['optical_depth_cell']:.3g} ± {r['optical_depth_cell_se']:.2g}, "
+            f"rms tilt {r['tilt_rms_deg_cell']:.3g}° ± {r['tilt_rms_deg_cell_se']:.2g}° (law {r['tilt_rms_deg_law']:.3g}°)")
+
+
 def _effect(recipe, mats, w, res):
     coat = _effect_coat(recipe, mats, w) if recipe.effect.by_composition else None
     brdf = _effect_brdf(recipe) if coat is None else coat.brdf(w)[0]
@@ -339,6 +350,7 @@ def _effect(recipe, mats, w, res):
                          f"{d.number_density_per_mm2:.4g} flakes/mm², optical depth τ = {d.optical_depth:.3g} "
                          f"(projected {d.projected_optical_depth:.3g}), mean tilt {d.mean_tilt_deg:.2f}°, flakes in "
                          f"{d.depth_range[0]:.2f}–{d.depth_range[1]:.2f} of the basecoat"
+                         + _realisation_note(getattr(d, "realisation", {}))
                          + (f"; expert override: {', '.join(d.overridden)}" if d.overridden else "") + ".")
     else:
         res.notes.append(f"Flake paint BRDF ({recipe.effect.flakes} flakes, optical depth {recipe.effect.optical_depth:g}, "
