@@ -71,3 +71,20 @@ def test_seed_spread_is_well_below_one_jnd(coats):
         assert len(labs) >= 3
         dE = np.sqrt(((labs - labs.mean(axis=0)) ** 2).sum(axis=-1))
         assert dE.max() < tol, (name, np.round(dE, 3))
+
+
+def test_a_fraction_the_coat_cannot_hold_names_the_key_and_the_most_that_fits():
+    # the pearl ×1.1: its cell is full after ~731 of 851 flakes — the message names the key and the largest fraction
+    from nmmm.errors import RecipeError
+
+    raw = tomllib.loads(example_path("fe2o3_mica_pearl").read_text())
+    raw["spectral"]["step_nm"] = 40.0
+    raw["effect"]["flakes"]["fraction"] *= 1.1
+    from nmmm.recipes.run import _effect_coat
+
+    rec = parse_recipe(raw, base_dir=example_path("fe2o3_mica_pearl").parent)
+    with pytest.raises(RecipeError) as exc:
+        _effect_coat(rec, None, W)
+    msg = str(exc.value)
+    assert msg.startswith("effect.flakes.fraction: the deposit model cannot place these flakes"), msg
+    assert "0.022 given (at most about 0.0189 of these flakes fit this 20 µm coat with seed 2)" in msg, msg
