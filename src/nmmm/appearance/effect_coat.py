@@ -453,7 +453,8 @@ class EffectCoat:
         bands, refused = [self._band(dep)], 0
         for k in range(1, BAND_REALISATIONS):
             try:
-                d_k = self._draw_deposit(np.random.SeedSequence(int(self.seed), spawn_key=(k,)))
+                ss = np.random.SeedSequence(None if self.seed is None else int(self.seed), spawn_key=(k,))
+                d_k = self._draw_deposit(ss)
             except InvalidInputError:
                 refused += 1
                 continue
