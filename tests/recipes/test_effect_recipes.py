@@ -43,8 +43,10 @@ def test_grey_metallic_recipe_and_demo_paint_give_identical_multiangle_cielab():
 
 # grey_metallic's far side, measured by the Monte-Carlo tracer of tests/appearance/test_brdf_montecarlo.py on the
 # recipe's exact coat (test_grey_metallic_far_side_is_flat_by_the_tracer, 8e6 photons, θi = 45°, light side,
-# φ 165-180°): f(θo 60-70°) / f(θo 25-35°), i.e. 110° over 75° aspecular, = 1.003 ± 0.008 (1 SE) at 450/550/650 nm
-GREY_FAR_RATIO_TRACER, GREY_FAR_RATIO_SE = 1.003, 0.008
+# φ 165-180°): f(θo 60-70°) / f(θo 25-35°), i.e. 110° over 75° aspecular, = 0.990 ± 0.008 (1 SE) at 450/550/650 nm
+# (0.9919 / 0.9902 / 0.9879; 1.003 on the coat of one deposit cell, τ 0.513 and a kernel estimate of its tilts, before
+# the derived layer became the composition's: τ 0.533, the deposit's half-normal tilt law, band 0.663-1)
+GREY_FAR_RATIO_TRACER, GREY_FAR_RATIO_SE = 0.990, 0.008
 
 
 def _Y(L):  # CIE 1976 lightness inverted (L* > 8): relative luminance Y/Yn
@@ -61,13 +63,22 @@ def test_shipped_effect_recipes_fall_in_lightness_and_flop_in_range(name):
     # ... and on to 110° where the physics says so (issue 18's acceptance). Beyond 75° the flakes' lobe is spent and
     # what is left is diffuse: the primer seen through the flake layer, light from flake to flake, rims. The red
     # metallic's pigment and the pearl's interference flakes keep darkening there; grey_metallic's mirror flakes
-    # (τ 0.51 over a 0.35 grey primer) leave a far side that the tracer finds flat (GREY_FAR_RATIO_TRACER), so its
-    # 110°/75° luminance ratio is held to the tracer's measurement within 4 SE: in-plane, as L* is computed, the
-    # model gives 1.020 (its azimuth modes brighten the plane of incidence on the light side: 1.011 averaged over
-    # the tracer's φ 165-180° bin, where the tracer's 1.003 ± 0.008 agrees with it; test below)
+    # (τ 0.53 over a 0.35 grey primer) leave a far side that the tracer finds flat (GREY_FAR_RATIO_TRACER), so the
+    # model's 110°/75° ratio averaged over the tracer's own bins (φ 165-180°; 1.0156 / 1.0136 / 1.0110) is held to
+    # the tracer's measurement within 4 SE (3.0 SE now), like with like; in-plane, as L* is computed, the model
+    # gives 1.023 (+0.39 L*): its azimuth modes brighten the plane of incidence on the light side by ~0.01 over
+    # the bin's average, held below 0.015
     if name == "grey_metallic":
         ratio = _Y(Ls[110.0]) / _Y(Ls[75.0])
-        assert abs(ratio - GREY_FAR_RATIO_TRACER) < 4 * GREY_FAR_RATIO_SE, (Ls, ratio)
+        mc = _montecarlo_module()
+        rec = parse_recipe(_raw("grey_metallic"), base_dir=example_path("grey_metallic").parent)
+        from nmmm.recipes.effect_schema import build_effect_coat
+
+        paint, _ = build_effect_coat(rec.effect, {}, name="grey").brdf(mc.WAVELENGTHS)
+        b = paint.bin_average(mc.WAVELENGTHS, mc._wi(45.0), (25.0, 35.0, 60.0, 70.0), (165.0, 180.0), n_quad=24)
+        ratio_bin = b[2, 0] / b[0, 0]
+        assert np.all(np.abs(ratio_bin - GREY_FAR_RATIO_TRACER) < 4 * GREY_FAR_RATIO_SE), (ratio_bin, ratio)
+        assert np.all(np.abs(ratio - ratio_bin) < 0.015), (Ls, ratio, ratio_bin)
     else:
         assert Ls[75.0] > Ls[110.0], Ls
     fi = res.scalars["flop_index"]
@@ -94,12 +105,14 @@ def test_grey_metallic_far_side_is_flat_by_the_tracer():
     """The independent check behind GREY_FAR_RATIO_TRACER: the Monte-Carlo photon tracer of
     tests/appearance/test_brdf_montecarlo.py (``trace_coat``: delta tracking through the flake band, Fresnel of the
     Al flakes, Lambertian primer, smooth coat) on the recipe's exact coat — the deposit's tilt density (sampled
-    as is), τ = 0.513 in the band z 0.556-1 of the 20 µm basecoat, clear binder n = 1.5, primer 0.35 — at
+    as is), τ = 0.533 in the band z 0.663-1 of the 20 µm basecoat, clear binder n = 1.5, primer 0.35 — at
     θi = 45°, light side (φ 150-180° and 165-180°, folded), θo 25-35° (75° aspecular) and 60-70° (110°), 450/550/650 nm.
-    8e6 photons in 16 runs of 5e5 (61 s of one core, loaded machine). Measured: f(60-70°)/f(25-35°) = 1.0051 /
-    1.0034 / 1.0011 ± 0.0078 (φ 165-180°; model 1.0126 / 1.0107 / 1.0083) and 1.0075 / 1.0058 / 1.0035 ± 0.0055
-    (φ 150-180°; model 1.0035 / 1.0018 / 0.9996; the model before review P gave 0.974 in its author's light-side
-    bins, which would be 6 SE off here); every bin within 2.9 SE (bin SE 0.55 %; the model is 0-1.6 % low). The
+    8e6 photons in 16 runs of 5e5 (131 s, loaded machine). Measured: f(60-70°)/f(25-35°) = 0.9919 /
+    0.9902 / 0.9879 ± 0.0078 (φ 165-180°; model 1.0156 / 1.0136 / 1.0110, 3.0 SE) and 0.9964 / 0.9946 / 0.9923 ± 0.0056
+    (φ 150-180°; model 1.0053 / 1.0035 / 1.0012); every bin within 3.0 SE (the model 1.5-2 SE low at 25-35°,
+    3 SE low / 2.7 SE high in the two φ bins at 60-70°). On the previous coat (one deposit cell's τ 0.513, a
+    kernel estimate of its tilts, band 0.556-1) the tracer gave 1.0051 / 1.0034 / 1.0011 and the model
+    1.0126 / 1.0107 / 1.0083 (φ 165-180°); the model before review P gave 0.974 in its author's light-side bins. The
     ratio's SE treats the two bins as independent (they share photons only through light that escapes twice,
     which correlates them positively: the true SE is smaller). Asserted: bins within 4 SE + 0.1 %, model ratio
     within 4 SE of the tracer's, the tracer's ratio within 4 SE of 1 (flat) and equal to the recorded constant."""
