@@ -42,7 +42,8 @@ Per pass, medians of 7-9 timed in alternation in one process (ms; "pair" = one b
   at 1 thread had no second core). ``run_all.py --only fft`` twice at load 1.5-3.9: 1 thread
   1.22, 1.37; 2 threads 1.16, 1.14 — at this load the row moves by ±0.15 between runs. The
   target <= 1.3 at 2 threads is met on a machine with a free second core (1.10-1.11 per pass,
-  1.13-1.32 in run_all's measure at load 1.7-2.3), not reliably under load. The pair in a loop is faster (42-43 ms at 2 threads) than one
+  1.13-1.32 in run_all's measure at load 1.7-2.3, and 1.30, 1.31 at load 0.9-1.5 with the pair at
+  41 ms, old kernels 1.55, 1.56 there; 1 thread 1.18, 1.21, old 1.53, 1.62): not reliably. The pair in a loop is faster (42-43 ms at 2 threads) than one
   pair among the iteration's passes (47-48): its single 48 MiB field stays in cache, the
   iteration streams over x, r, p, q and ψ (~210 MiB).
 - Floor of the element-wise passes: Numba streaming loops with the same traffic (real views,
