@@ -391,20 +391,7 @@ def _row_grad(psi, kind, i1, i2, j1, j2, g):
     C = psi[j1, i2]
     D = psi[j1, j2]
     for i3 in range(n3):
-        j3 = i3 + 1 if i3 + 1 < n3 else 0
-        if kind == 1:
-            c = A[i3]
-            g[0, i3] = C[i3] - c
-            g[1, i3] = B[i3] - c
-            g[2, i3] = A[j3] - c
-        else:
-            a = A[i3] + A[j3]
-            b = B[i3] + B[j3]
-            c = C[i3] + C[j3]
-            d = D[i3] + D[j3]
-            g[0, i3] = (c + d) - (a + b)
-            g[1, i3] = (b + d) - (a + c)
-            g[2, i3] = (A[j3] + B[j3] + C[j3] + D[j3]) - (A[i3] + B[i3] + C[i3] + D[i3])
+        _grad_real(A, B, C, D, kind, g, i3, i3 + 1 if i3 + 1 < n3 else 0)
 
 
 @_kernel
