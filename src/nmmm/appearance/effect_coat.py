@@ -52,7 +52,6 @@ from __future__ import annotations
 
 import inspect
 import math
-import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -385,10 +384,10 @@ class EffectCoat:
                 dep = self._draw_deposit(self.seed)
             except InvalidInputError as exc:
                 msg = str(exc)
-                m = re.search(r"deposit of (\d+) flakes .*full after about (\d+) flakes", msg)
+                n_drawn, n_fit = getattr(exc, "n_flakes", 0), getattr(exc, "n_fit", 0)
                 most = ""
-                if m and int(m.group(1)) > 0:
-                    phi_max = float(self.flakes.fraction) * int(m.group(2)) / int(m.group(1))
+                if n_drawn > 0:
+                    phi_max = float(self.flakes.fraction) * n_fit / n_drawn
                     most = (f" (at most about {phi_max:.3g} of these flakes fit this {self.coat_thickness_nm / 1e3:g} µm "
                             f"coat with seed {self.seed})")
                 raise InvalidInputError(f"flakes.fraction: the deposit model cannot place these flakes in the coat: "

@@ -377,11 +377,13 @@ def flake_deposit(
         top = z + hz
         if n and top.max() > box[2]:
             k = int(np.argmax(top > box[2]))
-            raise InvalidInputError(
+            err = InvalidInputError(
                 f"the deposit of {n} flakes rises to {top.max():.4g} nm, above the layer thickness {box[2]:.4g} nm "
                 f"(the layer is full after about {k} flakes); lower the fraction, the exclusion gap or the flake "
                 "thickness, or thicken the layer"
             )
+            err.n_flakes, err.n_fit = n, k  # for callers that name the largest fraction that fits
+            raise err
     else:
         z = hz + rng.random(n) * (box[2] - 2 * hz)
     centres = np.column_stack([xy, z])
