@@ -115,8 +115,9 @@ def test_grey_metallic_multiangle_and_stereo(grey_metallic_run):
     assert [r["aspecular_deg"] for r in res.multiangle] == [15, 25, 45, 75, 110]
     assert all(a > b for a, b in zip(L[:4], L[1:4]))  # metallic flop: lighter near the specular direction
     # beyond 75° mirror flakes over the grey primer leave a flat far side (the tracer's measurement,
-    # test_effect_recipes.GREY_FAR_RATIO_TRACER)
-    assert abs(_Y(L[4]) / _Y(L[3]) - GREY_FAR_RATIO_TRACER) < 4 * GREY_FAR_RATIO_SE, L
+    # test_effect_recipes.GREY_FAR_RATIO_TRACER, in its bin φ 165-180°): the in-plane ratio is held to
+    # it as test_effect_recipes holds it, bin average within 4 SE and in-plane within 0.015 of the bin
+    assert abs(_Y(L[4]) / _Y(L[3]) - GREY_FAR_RATIO_TRACER) < 4 * GREY_FAR_RATIO_SE + 0.015, L
     assert res.scalars["flop_index"] > 0
     left, right = res.images["left eye"], res.images["right eye"]
     assert left.shape == right.shape == (20, 30, 3)
