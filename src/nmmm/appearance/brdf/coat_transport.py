@@ -12,7 +12,11 @@ scattering kernels are renormalised so that a lossless slab conserves photons ex
 (the white furnace holds by construction, as without pigments). Each azimuthal Fourier mode
 is added separately (the substrate couples only the 0th); the multiply scattered part M is
 the total minus what terms 2–3 already hold: one flake reached and left without pigment
-scattering, and light that met neither flake nor pigment.
+scattering, and light that met neither flake nor pigment. F_ms is the same split of the same
+transport, (e − s)/(e0 − s0) with s that light escaping under diffuse incidence
+(:func:`_single_escape`): with the exact terms-2–3 albedo for s instead, the node quadrature's error
+on the single light (0.45 % low for the Fe2O3/mica pearl's 8° tilt on 48 × 32 nodes) fell entirely on
+the multiple term, 25× smaller: 0.80 / 0.89 / 0.97 of the tracer's at 450 / 550 / 650 nm (issue 18).
 
 References
 ----------
@@ -29,7 +33,8 @@ import numpy as np
 from nmmm.appearance.brdf.interpolation import _NA, _deg, _lerp1, _lerp_table
 from nmmm.appearance.brdf.ms_azimuth import N_MODES, flake_kernels, gauss_nodes, lobe_tables
 
-_N_MU = 48
+_N_MU = 96  # polar nodes (half in the escape cone)
+_N_PHI = 96  # azimuths of the flake kernel over [0, π)
 _MAX_STEP = 0.03  # largest extinction per doubling seed slab
 
 
@@ -74,10 +79,32 @@ def _on_top(R, T, Rbelow):
     return R + T @ np.linalg.solve(eye[None] - Rbelow @ R, Rbelow @ T)
 
 
+def _single_escape(tab, G_mirror, fext, v, Tint, D, d0, lamb, inv_mu, z0, dz):
+    """The transport's own terms 2–3 under diffuse incidence (L,): light that met one flake mirror and
+    no pigment scattering, or the substrate without any scattering (with the coat's underside), escaping.
+    ``multiply_scattered`` in :func:`coat_transport` removes the same from M_m."""
+    L, n_mu = Tint.shape
+    eye = np.eye(n_mu)
+    kap = (tab.kappa if v == 0 else tab.kappa0)[:, None]
+    rho = tab.rho if v == 0 else np.ones(L)
+    Rb = rho[:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
+    tdir = np.exp(-fext - kap * inv_mu)
+    X = tdir[:, :, None] * Rb * tdir[:, None, :]
+    S = np.linalg.solve(eye[None] - X * D[:, None, :], X)
+    if G_mirror is not None:
+        s2 = inv_mu.T + inv_mu
+        x = fext[:, :, None] + fext[:, None, :] + kap[:, :, None] * dz * s2[None]
+        S = S + (np.moveaxis(G_mirror[0, v], -1, 0) * tab.tau * np.exp(-kap[:, :, None] * z0 * s2[None])
+                 * -np.expm1(-x) / np.where(x > 0, x, 1.0))
+    return np.sum(Tint * np.einsum("ljk,lk->lj", S, d0), axis=1)
+
+
 def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     """F_ms(λ) of a paint with a coat medium (see the module docstring); the azimuthal modes
     c_m(θi, θo) of its lobe at up to 9 wavelength nodes (indices ``tab._ms_nodes``) are stored
-    on ``tab._ms_modes_spectral`` ``(NA, NA, K, n_modes)``, linear in λ between nodes."""
+    on ``tab._ms_modes_spectral`` ``(NA, NA, K, n_modes)``, linear in λ between nodes. ``sub``,
+    ``sub0`` (the exact terms-2–3 diffuse albedos) are no longer used: F_ms subtracts the transport's
+    own single light (module docstring)."""
     L, n = tab.L, tab.n
     th, mu, sn, dmu = gauss_nodes(n_mu, tab.n)
     eye = np.eye(n_mu)
@@ -85,7 +112,7 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     flakes = tab.has_flakes
     P = pigment_kernels(tab.g_pig, mu, sn, dmu, n_modes)
     if flakes:
-        G = flake_kernels(tab, mu, sn, dmu, n_modes)  # (M+1, up/down, actual/lossless, j, k, L)
+        G = flake_kernels(tab, mu, sn, dmu, n_modes, n_phi=_N_PHI)  # (M+1, up/down, actual/lossless, j, k, L)
         eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu
         target = eps[:, None] * tab.extinction_ratio(np.degrees(th))  # (k, L) per unit τ
         col0 = G[0, :, 1].sum(axis=(0, 1))
@@ -143,8 +170,11 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
         u = np.linalg.solve(eye[None] - Rtot * D[:, None, :], np.einsum("ljk,lk->lj", Rtot, d0)[..., None])[..., 0]
         escaped.append(np.sum(Tint * u, axis=1))
     e, e0 = escaped
-    norm = np.maximum(1.0 - tab.Es_bar, 1e-12)
-    s, s0 = sub / norm, sub0 / norm
+    # what terms 2–3 hold, from the same node transport (one flake mirror and no pigment scattering;
+    # the substrate seen without any scattering, the coat's underside included), escaping under diffuse
+    # incidence: F_ms = (e − s) / (e0 − s0) with this s, not the exact terms-2–3 albedo ``sub``
+    s, s0 = (_single_escape(tab, G_mirror if flakes else None, fext, v, Tint, D, d0, lamb, inv_mu, z0, dz)
+             for v in (0, 1))
     with np.errstate(divide="ignore", invalid="ignore"):
         F = np.clip(np.where(e0 - s0 > 1e-12, (e - s) / (e0 - s0), 0.0), 0.0, 1.0)
     # --- azimuthal modes of the multiply scattered part (a few wavelengths suffice: one shape)

@@ -284,6 +284,13 @@ def lobe_tables(tab, F, sel, ms, ms_lossless, th, mu, dmu):
     # whole paint — a per-node choice switched c_0 on and off along λ, the lobe factor of the pearl
     # once jumping 0.03 -> 0.21 -> 0.05 over 430–530 nm). What is left for the pearl is the amount
     # (10–20 % low at 450–550 nm, a small term: see test_transmitting_flakes_multiple_amount).
+    # That was c̄_0 itself: F_ms = (e − s)/(e0 − s0) took s, the terms 2–3, exact while e came from
+    # the node transport, whose own one-flake light was 0.45 % low (narrow tilt on 48 × 32 nodes);
+    # removing c̄_0 then removed 20 % of a multiple term 25× smaller than the single one. With
+    # F_ms from the transport's own split (coat_transport and multiple_scattering_factor, 96 × 96
+    # nodes) c̄_0 ≤ 3e-4 for the pearl (grey metallic 0.026 -> 1e-4) and its multiple amount at 45°
+    # is 1.007 / 1.008 / 1.005 of the tracer's. Paints without a coat medium keep this function's
+    # 48 × 32 transport for the shape: c̄_0 0.0016 (metallic_paint()), 0.0035 (interference_paint()).
     # ``tab.ms_lobe_shape`` says which lobe a paint has, ``tab.ms_shape_mean`` the c̄_0
     cbar = np.sum(wgt * (Wg @ mean_o(c0)), axis=0)  # (K,)
     good = bool(np.all(cbar > -0.9))

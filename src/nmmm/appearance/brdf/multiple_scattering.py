@@ -23,7 +23,7 @@ from nmmm.appearance.brdf.interpolation import _deg, _lerp1, _lerp_table
 from nmmm.appearance.brdf.ms_azimuth import gauss_nodes
 
 
-def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, n_doublings: int = 16):
+def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 96, n_phi: int = 96, n_doublings: int = 16):
     """F_ms(λ): multiply scattered light that escapes, relative to the lossless paint.
 
     Azimuthally averaged (0th Fourier mode: exact for hemispherical fluxes) transport
@@ -37,10 +37,13 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, 
     below, and the coat from below transmits T out of the escape cone and mirrors the
     rest back down. For diffuse light entering the coat this gives the total escaping
     fraction e(λ) (1 exactly for the lossless paint); removing the single-scattering
-    escape s (``sub``: the terms 2–3 albedo averaged over diffuse incidence, per unit
-    light entering) leaves the multiply scattered part, and
-    F_ms = (e − s) / (1 − s⁰), so that the diffuse-incidence albedo of the model is the
-    transport result and F_ms = 1 for a lossless paint (white furnace untouched).
+    escape s (what the terms 2–3 hold, under diffuse incidence, per unit light entering)
+    leaves the multiply scattered part, and
+    F_ms = (e − s) / (e⁰ − s⁰), F_ms = 1 for a lossless paint (white furnace untouched).
+    s is the same transport's single light (one flake mirror, the base seen straight), not the exact
+    terms-2–3 albedo ``sub`` (no longer used): the node quadrature's error on the single light falls
+    on e − s otherwise (issue 18: the Fe2O3/mica pearl's multiple term 20 % low, see
+    :mod:`~nmmm.appearance.brdf.coat_transport`). 96 × 96 nodes (polar × azimuth), as coat_transport.
 
     This replaced a bounce model keeping only single flake scattering per pass, which
     lost 20–40 % of the lossless light per bounce and overestimated F_ms for absorbing
@@ -77,7 +80,11 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, 
     d0 = d0 / d0.sum(axis=1, keepdims=True)
     lamb = 2 * mu * dmu
     lamb = lamb / lamb.sum()  # Lambertian redistribution over the nodes
-    escaped = []
+    escaped, single = [], []
+    tT = np.moveaxis(target, -1, 0)  # (L, k) extinction per unit τ
+    x = tab.tau * (tT[:, :, None] + tT[:, None, :])
+    phi = -np.expm1(-x) / np.where(x > 0, x, 1.0)  # one flake, either direction's extinction
+    Tdir = np.exp(-tab.tau * tT)
     for v, rho in ((0, tab.rho), (1, np.ones(L))):
         R = np.moveaxis(delta * G[0, v] * scale[None], -1, 0)  # (L, j, k)
         T = np.moveaxis(delta * G[1, v] * scale[None] + eye[..., None] * (1 - delta * target)[None], -1, 0)
@@ -89,9 +96,14 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 48, n_phi: int = 32, 
         u = np.linalg.solve(eye[None] - Rtot * (1 - Tint)[:, None, :],
                             np.einsum("ljk,lk->lj", Rtot, d0)[..., None])[..., 0]
         escaped.append(np.sum(Tint * u, axis=1))
+        # the same transport's terms 2–3: one flake mirror, and the base seen straight (coat's underside
+        # included), escaping under diffuse incidence
+        X = Tdir[:, :, None] * Rb * Tdir[:, None, :]
+        S = (np.linalg.solve(eye[None] - X * (1 - Tint)[:, None, :], X)
+             + np.moveaxis(G[0, v] * scale[None], -1, 0) * tab.tau * phi)
+        single.append(np.sum(Tint * np.einsum("ljk,lk->lj", S, d0), axis=1))
     e, e0 = escaped
-    norm = np.maximum(1.0 - tab.Es_bar, 1e-12)
-    s, s0 = sub / norm, sub0 / norm
+    s, s0 = single  # not the exact ``sub``, ``sub0``: the node quadrature's error would fall on the small e − s
     with np.errstate(divide="ignore", invalid="ignore"):
         F = np.where(e0 - s0 > 1e-12, (e - s) / (e0 - s0), 0.0)
     return np.clip(F, 0.0, 1.0)
