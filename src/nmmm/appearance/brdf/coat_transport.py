@@ -99,12 +99,11 @@ def _single_escape(tab, G_mirror, fext, v, Tint, D, d0, lamb, inv_mu, z0, dz):
     return np.sum(Tint * np.einsum("ljk,lk->lj", S, d0), axis=1)
 
 
-def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
+def coat_transport(tab, n_modes: int = N_MODES, n_mu: int = _N_MU):
     """F_ms(λ) of a paint with a coat medium (see the module docstring); the azimuthal modes
     c_m(θi, θo) of its lobe at up to 9 wavelength nodes (indices ``tab._ms_nodes``) are stored
-    on ``tab._ms_modes_spectral`` ``(NA, NA, K, n_modes)``, linear in λ between nodes. ``sub``,
-    ``sub0`` (the exact terms-2–3 diffuse albedos) are no longer used: F_ms subtracts the transport's
-    own single light (module docstring)."""
+    on ``tab._ms_modes_spectral`` ``(NA, NA, K, n_modes)``, linear in λ between nodes. F_ms
+    subtracts the transport's own single light, not the exact terms-2–3 albedo (module docstring)."""
     L, n = tab.L, tab.n
     th, mu, sn, dmu = gauss_nodes(n_mu, tab.n)
     eye = np.eye(n_mu)
@@ -172,7 +171,7 @@ def coat_transport(tab, sub, sub0, n_modes: int = N_MODES, n_mu: int = _N_MU):
     e, e0 = escaped
     # what terms 2–3 hold, from the same node transport (one flake mirror and no pigment scattering;
     # the substrate seen without any scattering, the coat's underside included), escaping under diffuse
-    # incidence: F_ms = (e − s) / (e0 − s0) with this s, not the exact terms-2–3 albedo ``sub``
+    # incidence: F_ms = (e − s) / (e0 − s0) with this s, not the exact terms-2–3 albedo
     s, s0 = (_single_escape(tab, G_mirror if flakes else None, fext, v, Tint, D, d0, lamb, inv_mu, z0, dz)
              for v in (0, 1))
     with np.errstate(divide="ignore", invalid="ignore"):

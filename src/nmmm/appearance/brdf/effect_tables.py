@@ -122,10 +122,8 @@ class _EffectTables(_Tables):
         self.E10[-1] = Esi[-1]
         self.Dms = np.clip(1.0 - self.E10, 0.0, 1.0)
         E0_bar = 2 * (w_e * mu_e) @ _lerp_table(self.E10, th_e, self.astep)
-        sub = 2 * (w_e * mu_e) @ _lerp_table(self.E1 - Esi, th_e, self.astep)
-        sub0 = 2 * (w_e * mu_e) @ _lerp_table(self.E10 - Esi, th_e, self.astep)
         self.E0_bar = E0_bar
-        self.Fms = coat_transport(self, sub, sub0)  # also the lobe's shape tables (c_0 and the modes)
+        self.Fms = coat_transport(self)  # also the lobe's shape tables (c_0 and the modes)
         # attenuation by the pigments, exp(−c S'), tabulated over S' = 1/μi' + 1/μo' (2 … 2/μc',
         # internal directions lie in the escape cone): 2048 nodes, relative error ≤ (c Δ)²/8 ≈ 1e-5 c²
         mu_min = np.sqrt(max(1 - 1 / (n * n), 1e-6))
