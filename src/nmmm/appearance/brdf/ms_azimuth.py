@@ -265,32 +265,13 @@ def lobe_tables(tab, F, sel, ms, ms_lossless, th, mu, dmu):
     A0 = on_grid(ms[0])
     c0 = np.where(okF, A0 / np.where(okF, KC * Fk, 1.0) - 1.0 - Y, 0.0)
     # F_ms carries the diffuse-incidence amount, c_0 the shape: its diffuse mean c̄_0 is removed
-    # (|c̄_0| ≤ 1e-3 for the Al and pigment paints of the Monte-Carlo tests). c̄_0 measures how the
-    # node transport and the exact terms 2–3 split single from multiple scattering, relative to the
-    # multiple amount: it grows where that amount is small — flakes that reflect little in a coat
-    # with a narrow tilt. The shipped Fe2O3/mica pearl: c̄_0 0.05–0.27 over its 9 nodes (and the
-    # same, 0.09–0.27, for an opaque flake with the pearl's R(θ), or 0.155 for opaque grey R = 0.3
-    # flakes in that coat: not a matter of transmission). Until issue 18 a |c̄_0| > 5 % switched the
-    # paint to the separable lobe (c_0 = 0). Measured against the tracer of
-    # tests/appearance/test_brdf_montecarlo.py (flakes that reflect and transmit, θi = 45°,
-    # 450/550/650 nm; the bins of the multiple term, model / tracer, min–max over 12 bins), the
-    # transport's shape is right where the separable one is not: pearl (4·10^6 photons) 0.79–0.85,
-    # 0.87–0.91, 0.96–0.98 against separable 0.69–1.11, 0.78–1.19, 0.90–1.19; TiO2/mica 120 nm
-    # (2·10^6) 0.95–1.01, 0.90–1.14, 0.92–0.96 against 0.88–1.16, 0.97–1.08, 0.76–1.33; the opaque
-    # pearl-R flake (10^6) 0.78–0.84, 0.82–0.89, 0.91–0.97 against 0.69–1.11, 0.75–1.17, 0.90–1.11.
-    # Bins of the total beyond 4 SE + 0.1 %: pearl 1/36 (transport) against 10/36 (separable),
-    # TiO2/mica 0/36 against 3/36. So the lobe is the transport's wherever 1 + c̄_0 stays positive
-    # (≤ −0.9 would leave the renormalised c_0 meaningless: then the separable lobe, for the
-    # whole paint — a per-node choice switched c_0 on and off along λ, the lobe factor of the pearl
-    # once jumping 0.03 -> 0.21 -> 0.05 over 430–530 nm). What is left for the pearl is the amount
-    # (10–20 % low at 450–550 nm, a small term: see test_transmitting_flakes_multiple_amount).
-    # That was c̄_0 itself: F_ms = (e − s)/(e0 − s0) took s, the terms 2–3, exact while e came from
-    # the node transport, whose own one-flake light was 0.45 % low (narrow tilt on 48 × 32 nodes);
-    # removing c̄_0 then removed 20 % of a multiple term 25× smaller than the single one. With
-    # F_ms from the transport's own split (coat_transport and multiple_scattering_factor, 96 × 96
-    # nodes) c̄_0 ≤ 3e-4 for the pearl (grey metallic 0.026 -> 1e-4) and its multiple amount at 45°
-    # is 1.007 / 1.008 / 1.005 of the tracer's. Paints without a coat medium keep this function's
-    # 48 × 32 transport for the shape: c̄_0 0.0016 (metallic_paint()), 0.0035 (interference_paint()).
+    # (≤ 3e-4 for the shipped recipes since F_ms comes from the transport's own single/multiple split,
+    # issue 18; it was 0.05–0.30 for the Fe2O3/mica pearl when F_ms subtracted the exact terms 2–3).
+    # The transport's shape is used for flakes that transmit too: against the Monte-Carlo tracer
+    # (tests/appearance/test_brdf_montecarlo.py, θi = 45°) it left 1/36 (pearl) and 0/36 (TiO2/mica)
+    # bins beyond 4 SE + 0.1 %, the separable lobe 10/36 and 3/36. The separable lobe (c_0 = 0) remains
+    # only where 1 + c̄_0 ≤ 0.1 would make the renormalised c_0 meaningless — for the whole paint, as a
+    # per-node choice switched c_0 on and off along λ.
     # ``tab.ms_lobe_shape`` says which lobe a paint has, ``tab.ms_shape_mean`` the c̄_0
     cbar = np.sum(wgt * (Wg @ mean_o(c0)), axis=0)  # (K,)
     good = bool(np.all(cbar > -0.9))
