@@ -24,8 +24,11 @@ specular side (γ = 45°: along the normal; γ = 110°: 65° on the illuminator'
   direction, see below).
 - :func:`multiangle_reflectance` — reflectance factors R = π f at those geometries.
 - :func:`multiangle_lab` -> :class:`MultiAngleColour` (L*, a*, b*, C*, h per angle).
-- :func:`flop_index` with :data:`FLOP_INDEX_METHODS` (``"Alman 1987"``, the X-Rite /
-  DuPont flop index FI = 2.69 (L*15 − L*110)^1.11 / (L*45)^0.86).
+- :func:`flop_index` with :data:`FLOP_INDEX_METHODS` and the angles each formula takes,
+  :data:`FLOP_INDEX_ASPECULAR_DEG`: ``"Alman 1987"``, the X-Rite / DuPont flop index
+  FI = 2.69 (L*15 − L*110)^1.11 / (L*45)^0.86; ``"highlight-shade dL* (US 11472963)"``,
+  ΔL*(h−s) = (L*15 + L*25)/2 − (L*75 + L*110)/2, the highlight − shade lightness difference
+  defined in the abstract of US Patent 11,472,963 (see :func:`lightness_flop_highlight_shade`).
 - :func:`plot_colour_travel` — a*b* trajectory, L* against aspecular angle, swatches.
 
 Out-of-plane geometries
@@ -42,11 +45,21 @@ so φ = 0 is the in-plane geometry above and (γ, 180°) is (−γ, 0). This par
 module's own; ASTM E2175's out-of-plane notation was not read here and no commercial
 out-of-plane set is listed (none was found in a citable source).
 
-*Not listed*, for want of a source read here (a search of stored standards, vendor and paper
-pages, public code and issues): the X-Rite MA98, MA-T6 and MA-T12 geometry sets (15° and 45°
-illumination, the MA98's out-of-plane detectors), the 15° illumination set of ASTM E2539, the
-geometries and colour-difference formula of DIN 6175-2 / DIN 6175:2019, and any flop formula
-other than Alman's with its coefficients as published.
+*Not listed*, for want of a source read here: the X-Rite MA98, MA-T6 and MA-T12 geometry
+sets (15° and 45° illumination, the MA98's out-of-plane detectors), the 15° illumination set
+of ASTM E2539, the geometries and colour-difference formula of DIN 6175-2 / DIN 6175:2019,
+and any flop formula named "flop index" other than Alman's. The stored copies of ASTM
+E2539-12/-14 reachable here hold only the opening pages (scope, §1.1–1.9), not the apparatus
+section or geometry table; X-Rite's brochures and manuals (MA98, MA-T6/T12, MA-5 QC, Color iQC
+calculations guide) were not reachable beyond their first page; the open-access paper that
+compares the MA98, Datacolor FX10 and BYK-mac geometries (J. Opt. Soc. Am. A 32(1), 1,
+http://opg.optica.org/josaa/viewmedia.cfm?uri=josaa-32-1-1) was reachable only up to its
+introduction. Public code does hard-code geometry names such as
+45as−15 … 45as110, 15as−45 … 15as80 and out-of-plane 45as25az±90, 45as60az±125.3,
+15as38.3az±43, 15as46.9az±104.5 (names of the MA98's kind), but code is not a citable source
+for an instrument and its azimuth convention is unstated, so none of it is used here. A ratio
+L*15/L*110 is claimed in a coated-article patent application (US 2026/0176480 A1, abstract)
+without being named a flop index; it is not registered.
 
 References
 ----------
@@ -85,7 +98,9 @@ __all__ = [
     "MultiAngleColour",
     "flop_index",
     "flop_index_alman1987",
+    "lightness_flop_highlight_shade",
     "FLOP_INDEX_METHODS",
+    "FLOP_INDEX_ASPECULAR_DEG",
     "plot_colour_travel",
 ]
 
@@ -281,6 +296,16 @@ def multiangle_lab_set(brdf, wavelength_nm, geometry: str = "ASTM E2539 (45° il
 # -- flop index -------------------------------------------------------------------------
 
 
+def _lightnesses(values, names):
+    out = []
+    for v, n in zip(values, names):
+        v = np.asarray(check_finite(v, n), float)
+        if np.any(v < 0):
+            raise InvalidInputError(f"{n} must be >= 0 (CIELAB lightness), got min {v.min()!r}")
+        out.append(v)
+    return out
+
+
 def flop_index_alman1987(L15, L45, L110):
     """Flop index FI = 2.69 (L*15 − L*110)^1.11 / (L*45)^0.86 (Alman 1987; X-Rite, DuPont).
 
@@ -301,21 +326,63 @@ def flop_index_alman1987(L15, L45, L110):
     return 2.69 * np.sign(d) * np.abs(d) ** 1.11 / L45 ** 0.86
 
 
-#: registry of flop-index formulas: name -> function(L15, L45, L110)
-FLOP_INDEX_METHODS = {"Alman 1987": flop_index_alman1987}
+def lightness_flop_highlight_shade(L15, L25, L75, L110):
+    """Highlight − shade lightness difference ΔL*(h−s) = (L*15 + L*25)/2 − (L*75 + L*110)/2.
+
+    Defined in US Patent 11,472,963 ("Glitter pigment, pigment-containing composition, and
+    pigment-containing painted product"), abstract: with the illuminant at 45° incidence,
+    angles counted from the regularly reflected direction (0°), positive towards the light
+    (this module's aspecular angle), "ΔL*(h−s) value is a difference in L* between a
+    highlight and shade ... The highlight is an average of values measured at 15° and 25°,
+    and the shade is an average of values measured at 75° and 110°" (abstract as reproduced
+    at https://golden.com/wiki/US_Patent_11472963_Glitter_pigment%2C_pigment-containing_composition%2C_and_pigment-containing_painted_product-BY84JRP;
+    the patent's full text was not read). The patent uses it (claimed below 30, with
+    L*(15) above 100) to bound the angle-dependent change of the reflected light, i.e. the
+    lightness flop; it is a plain difference in L* units, not scaled like Alman's index.
+    The patent gives no worked example in the text read, so the check is the definition on
+    hand-computed values:
+
+    >>> float(lightness_flop_highlight_shade(120.0, 100.0, 40.0, 30.0))  # 110 − 35
+    75.0
+    """
+    L15, L25, L75, L110 = _lightnesses((L15, L25, L75, L110), ("L*15", "L*25", "L*75", "L*110"))
+    return (L15 + L25) / 2.0 - (L75 + L110) / 2.0
 
 
-def flop_index(colour_or_L15, L45=None, L110=None, method: str = "Alman 1987"):
-    """Flop index from a :class:`MultiAngleColour` (needs 15°, 45°, 110°) or from the three
-    lightnesses; ``method`` picks a formula in :data:`FLOP_INDEX_METHODS`."""
+#: registry of flop formulas: name -> function of the lightnesses at
+#: :data:`FLOP_INDEX_ASPECULAR_DEG` [name] (in that order, 45° illumination)
+FLOP_INDEX_METHODS = {
+    "Alman 1987": flop_index_alman1987,
+    "highlight-shade dL* (US 11472963)": lightness_flop_highlight_shade,
+}
+#: the aspecular angles (deg, 45° illumination) whose L* each method of
+#: :data:`FLOP_INDEX_METHODS` takes, in argument order
+FLOP_INDEX_ASPECULAR_DEG = {
+    "Alman 1987": (15.0, 45.0, 110.0),
+    "highlight-shade dL* (US 11472963)": (15.0, 25.0, 75.0, 110.0),
+}
+
+
+def flop_index(colour_or_L, *lightnesses, method: str = "Alman 1987"):
+    """Flop index by a formula of :data:`FLOP_INDEX_METHODS` (``method``), from a
+    :class:`MultiAngleColour` (which must hold the in-plane angles
+    :data:`FLOP_INDEX_ASPECULAR_DEG` [method] at 45° illumination) or from the lightnesses
+    at those angles, given in that order (``flop_index(L15, L45, L110)`` for Alman 1987)."""
     if method not in FLOP_INDEX_METHODS:
         raise InvalidInputError(f"unknown flop index method {method!r}; choose among {list(FLOP_INDEX_METHODS)}")
-    if isinstance(colour_or_L15, MultiAngleColour):
-        c = colour_or_L15
-        return float(FLOP_INDEX_METHODS[method](c.lightness_at(15), c.lightness_at(45), c.lightness_at(110)))
-    if L45 is None or L110 is None:
-        raise InvalidInputError("give a MultiAngleColour or the three lightnesses L15, L45, L110")
-    return FLOP_INDEX_METHODS[method](colour_or_L15, L45, L110)
+    angles = FLOP_INDEX_ASPECULAR_DEG[method]
+    if isinstance(colour_or_L, MultiAngleColour):
+        c = colour_or_L
+        if lightnesses:
+            raise InvalidInputError("give a MultiAngleColour alone, or the lightnesses alone")
+        if not np.isclose(c.illumination_deg, 45.0):
+            raise InvalidInputError(f"flop formulas are defined at 45° illumination, got {c.illumination_deg}°")
+        return float(FLOP_INDEX_METHODS[method](*(c.lightness_at(g) for g in angles)))
+    values = (colour_or_L, *lightnesses)
+    if len(values) != len(angles):
+        names = ", ".join(f"L*{g:g}" for g in angles)
+        raise InvalidInputError(f"method {method!r} takes {len(angles)} lightnesses ({names}), got {len(values)}")
+    return FLOP_INDEX_METHODS[method](*values)
 
 
 # -- plots ------------------------------------------------------------------------------
