@@ -40,3 +40,61 @@ def test_set_equals_multiangle_lab_at_its_angles_and_unknown_set_is_refused():
     np.testing.assert_array_equal(c.lab, multiangle_lab(paint, W, (-15, 15, 25, 45, 75, 110)).lab)
     with pytest.raises(InvalidInputError, match="unknown geometry set 'MA98'"):
         multiangle_lab_set(paint, W, "MA98")
+
+
+# -- flop formulas of the registry ------------------------------------------------------
+
+
+def test_flop_registry_declares_the_angles_each_formula_takes():
+    import inspect
+
+    from nmmm.appearance.multiangle import FLOP_INDEX_ASPECULAR_DEG, FLOP_INDEX_METHODS
+
+    assert set(FLOP_INDEX_METHODS) == set(FLOP_INDEX_ASPECULAR_DEG)
+    assert {"Alman 1987", "highlight-shade dL* (US 11472963)"} <= set(FLOP_INDEX_METHODS)
+    for name, fn in FLOP_INDEX_METHODS.items():
+        assert len(inspect.signature(fn).parameters) == len(FLOP_INDEX_ASPECULAR_DEG[name]), name
+
+
+def test_highlight_shade_difference_is_the_patent_definition_on_hand_values():
+    from nmmm.appearance.multiangle import flop_index, lightness_flop_highlight_shade
+
+    # highlight (L*15 + L*25)/2 = (90 + 70)/2 = 80; shade (L*75 + L*110)/2 = (30 + 20)/2 = 25
+    assert lightness_flop_highlight_shade(90.0, 70.0, 30.0, 20.0) == 55.0
+    assert flop_index(90.0, 70.0, 30.0, 20.0, method="highlight-shade dL* (US 11472963)") == 55.0
+    # a solid (same L* at every angle) has no flop; vectorised over samples
+    np.testing.assert_array_equal(lightness_flop_highlight_shade([50.0, 10.0], [50.0, 10.0], [50.0, 10.0],
+                                                                 [50.0, 10.0]), [0.0, 0.0])
+    with pytest.raises(InvalidInputError, match="L\\*75 must be >= 0"):
+        lightness_flop_highlight_shade(90.0, 70.0, -1.0, 20.0)
+
+
+def test_flop_of_a_measured_set_reads_each_formulas_own_angles():
+    from nmmm.appearance.multiangle import flop_index, flop_index_alman1987, lightness_flop_highlight_shade
+
+    c = multiangle_lab_set(opaque_paint(0.4), W, "BYK-mac i")[45.0]
+    L = {g: float(l) for g, l in zip(c.aspecular_deg, c.L)}
+    assert np.isclose(flop_index(c), flop_index_alman1987(L[15.0], L[45.0], L[110.0]))
+    assert np.isclose(flop_index(c, method="highlight-shade dL* (US 11472963)"),
+                      lightness_flop_highlight_shade(L[15.0], L[25.0], L[75.0], L[110.0]))
+    assert np.isclose(c.flop_index("highlight-shade dL* (US 11472963)"),
+                      (L[15.0] + L[25.0]) / 2 - (L[75.0] + L[110.0]) / 2)
+    # the perfect diffuser has no flop by either formula
+    white = multiangle_lab_set(_Lambertian(), W, "BYK-mac i")[45.0]
+    for method in ("Alman 1987", "highlight-shade dL* (US 11472963)"):
+        assert abs(flop_index(white, method=method)) < 1e-6
+
+
+def test_flop_refusals_name_the_choices_and_the_missing_angles():
+    from nmmm.appearance.multiangle import flop_index
+
+    with pytest.raises(InvalidInputError, match="choose among \\['Alman 1987', 'highlight-shade dL\\* \\(US 11472963\\)'\\]"):
+        flop_index(1.0, 2.0, 3.0, method="DIN 6175-2")
+    with pytest.raises(InvalidInputError, match="takes 4 lightnesses \\(L\\*15, L\\*25, L\\*75, L\\*110\\), got 3"):
+        flop_index(1.0, 2.0, 3.0, method="highlight-shade dL* (US 11472963)")
+    three = multiangle_lab_set(opaque_paint(0.4), W, "ASTM E2194")[45.0]  # 15, 45, 110 only
+    with pytest.raises(InvalidInputError, match="aspecular angle 25.0° .* was not measured"):
+        flop_index(three, method="highlight-shade dL* (US 11472963)")
+    at15 = multiangle_lab(opaque_paint(0.4), W, (15.0, 45.0, 60.0), illumination_deg=15.0)
+    with pytest.raises(InvalidInputError, match="45° illumination"):
+        flop_index(at15)
