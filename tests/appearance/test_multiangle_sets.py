@@ -98,3 +98,40 @@ def test_flop_refusals_name_the_choices_and_the_missing_angles():
     at15 = multiangle_lab(opaque_paint(0.4), W, (15.0, 45.0, 60.0), illumination_deg=15.0)
     with pytest.raises(InvalidInputError, match="45° illumination"):
         flop_index(at15)
+
+
+# -- X-Rite's 19 geometries: the two illuminators share their detectors ------------------
+
+
+def _viewing_directions(ti, inplane, out_of_plane):
+    from nmmm.appearance.multiangle import aspecular_directions
+
+    g = list(inplane) + [a for a, _ in out_of_plane]
+    phi = [0.0] * len(inplane) + [p for _, p in out_of_plane]
+    return aspecular_directions(g, ti, phi)[1]
+
+
+def test_xrite_geometries_of_both_illuminators_view_along_shared_detector_directions():
+    """An instrument with two illuminators (45°, 15°) and fixed detectors: every geometry of the 15° set must
+    view along a direction of the 45° set. True for the in-plane angles by construction of the list
+    (θv = 60, 30, 0, −30, −65° in both); for the out-of-plane ones it holds only with X-Rite's azimuth read as
+    180° − φ (XRITE_OUT_OF_PLANE_DEG), within 0.04° (X-Rite's values have one decimal). Read literally, its
+    45as60az125.3 would view from below the horizon."""
+    from nmmm.appearance.multiangle import XRITE_OUT_OF_PLANE_DEG, aspecular_directions
+
+    sets = GEOMETRY_SETS["X-Rite 19 geometries (in-plane)"]
+    d45 = _viewing_directions(45.0, sets[45.0], XRITE_OUT_OF_PLANE_DEG[45.0])
+    d15 = _viewing_directions(15.0, sets[15.0], XRITE_OUT_OF_PLANE_DEG[15.0])
+    assert len(d45) + len(d15) == 19
+    sep = np.degrees(np.arccos(np.clip(d15 @ d45.T, -1.0, 1.0))).min(axis=1)
+    assert np.all(sep < 0.05), sep
+    with pytest.raises(InvalidInputError, match="below the surface"):
+        aspecular_directions([60.0], 45.0, [125.3])
+
+
+def test_xrite_set_on_a_paint_gives_one_colour_per_illuminator():
+    paint = opaque_paint(0.4)
+    out = multiangle_lab_set(paint, W, "X-Rite 19 geometries (in-plane)")
+    assert sorted(out) == [15.0, 45.0]
+    assert out[15.0].aspecular_deg.tolist() == [-45.0, -15.0, 15.0, 45.0, 80.0]
+    assert np.all(np.isfinite(out[15.0].lab)) and np.all(np.isfinite(out[45.0].lab))

@@ -42,6 +42,7 @@ _LAZY = {
     "aspecular_directions": "multiangle", "plot_colour_travel": "multiangle",
     "ASTM_E2194_ASPECULAR_DEG": "multiangle", "ASTM_E2539_ASPECULAR_DEG": "multiangle",
     "FLOP_INDEX_ASPECULAR_DEG": "multiangle", "GEOMETRY_SETS": "multiangle", "multiangle_lab_set": "multiangle",
+    "XRITE_OUT_OF_PLANE_DEG": "multiangle",
     "sparkle_graininess": "sparkle", "grey_metallic_from_deposit": "deposit", "grey_metallic_coat": "deposit",
     "EffectCoat": "effect_coat", "FlakeSpec": "effect_coat",
 }

@@ -42,22 +42,22 @@ illuminator) and φ = +90° the +y side (the plane of incidence is xz, light fro
     t = (cos θi, 0, sin θi)
 
 so φ = 0 is the in-plane geometry above and (γ, 180°) is (−γ, 0). This parametrisation is this
-module's own; ASTM E2175's out-of-plane notation was not read here and no commercial
-out-of-plane set is listed (none was found in a citable source).
+module's own; ASTM E2175's out-of-plane notation was not read here. X-Rite's out-of-plane
+geometries (:data:`XRITE_OUT_OF_PLANE_DEG`) turn about r the same way but count φ from the other
+in-plane side: read literally here, 45as60az125.3 would view from below the horizon; read as
+φ = 180° − 125.3°, every out-of-plane geometry of either illuminator views along a direction of
+the other's set, within 0.04° (shared detectors, as the in-plane ones are).
 
-*Not listed*, for want of a source read here: the X-Rite MA98, MA-T6 and MA-T12 geometry
-sets (15° and 45° illumination, the MA98's out-of-plane detectors), the 15° illumination set
-of ASTM E2539, the geometries and colour-difference formula of DIN 6175-2 / DIN 6175:2019,
+*Not listed*, for want of a source read here: sets named after an instrument model (X-Rite
+MA98, MA-T6, MA-T12; the "X-Rite 19 geometries" set is sourced from X-Rite's code, which names
+no model), the 15° illumination set of ASTM E2539, the geometries and colour-difference formula of DIN 6175-2 / DIN 6175:2019,
 and any flop formula named "flop index" other than Alman's. The stored copies of ASTM
 E2539-12/-14 reachable here hold only the opening pages (scope, §1.1–1.9), not the apparatus
 section or geometry table; X-Rite's brochures and manuals (MA98, MA-T6/T12, MA-5 QC, Color iQC
 calculations guide) were not reachable beyond their first page; the open-access paper that
 compares the MA98, Datacolor FX10 and BYK-mac geometries (J. Opt. Soc. Am. A 32(1), 1,
 http://opg.optica.org/josaa/viewmedia.cfm?uri=josaa-32-1-1) was reachable only up to its
-introduction. Public code does hard-code geometry names such as
-45as−15 … 45as110, 15as−45 … 15as80 and out-of-plane 45as25az±90, 45as60az±125.3,
-15as38.3az±43, 15as46.9az±104.5 (names of the MA98's kind), but code is not a citable source
-for an instrument and its azimuth convention is unstated, so none of it is used here. A ratio
+introduction. A ratio
 L*15/L*110 is claimed in a coated-article patent application (US 2026/0176480 A1, abstract)
 without being named a flop index; it is not registered.
 
@@ -91,6 +91,7 @@ __all__ = [
     "ASTM_E2539_ASPECULAR_DEG",
     "GEOMETRY_SETS",
     "GEOMETRY_SOURCES",
+    "XRITE_OUT_OF_PLANE_DEG",
     "multiangle_lab_set",
     "aspecular_directions",
     "multiangle_reflectance",
@@ -117,6 +118,20 @@ GEOMETRY_SETS = {
     "ASTM E2194 (5 angles)": {45.0: ASTM_E2194_ALL_ASPECULAR_DEG},
     "ASTM E2539 (45° illumination)": {45.0: ASTM_E2539_ASPECULAR_DEG},
     "BYK-mac i": {45.0: (-15.0, 15.0, 25.0, 45.0, 75.0, 110.0)},
+    "X-Rite 19 geometries (in-plane)": {45.0: (-15.0, 15.0, 25.0, 45.0, 75.0, 110.0),
+                                        15.0: (-45.0, -15.0, 15.0, 45.0, 80.0)},
+}
+
+#: the out-of-plane geometries of X-Rite's 19-geometry list, ``{illumination_deg: ((γ, φ), ...)}`` in this
+#: module's (γ, φ) convention (module docstring). X-Rite writes them 45as25az±90, 45as60az±125.3,
+#: 15as38.3az±43 and 15as46.9az±104.5: its azimuth is 180° − φ here (its φ = 0 is the in-plane side of
+#: negative γ), the only reading under which each of them views along a direction that the other
+#: illuminator's geometries also use (the instrument's detectors are shared by its two illuminators,
+#: as its in-plane geometries are; tests/appearance/test_multiangle_sets.py). The sign of φ (±y) is
+#: not needed: the geometries come in ± pairs.
+XRITE_OUT_OF_PLANE_DEG = {
+    45.0: ((25.0, 90.0), (25.0, -90.0), (60.0, 54.7), (60.0, -54.7)),
+    15.0: ((38.3, 137.0), (38.3, -137.0), (46.9, 75.5), (46.9, -75.5)),
 }
 #: where each set of :data:`GEOMETRY_SETS` comes from
 GEOMETRY_SOURCES = {
@@ -127,6 +142,12 @@ GEOMETRY_SOURCES = {
     "BYK-mac i": "BYK-Gardner's BYK-mac i description (https://www.byk-instruments.com/en-US/color/byk-mac-i): colour "
                  "at 15°, 25°, 45°, 75° and 110° aspecular plus a behind-gloss angle (−15°) for interference pigments, "
                  "45° illumination — as summarised in a third-party note; the vendor page itself was not read here",
+    "X-Rite 19 geometries (in-plane)": "the directional multi-angle geometries named in X-Rite's own formulation "
+                                       "code (TypeScript importing @xrite/cloud-formulation-domain-model and "
+                                       "@xrite/colorimetry-js; a public GitHub file whose repository the search tool "
+                                       "did not name): 45as−15/15/25/45/75/110 and 15as−45/−15/15/45/80, with "
+                                       "out-of-plane ones (XRITE_OUT_OF_PLANE_DEG); the file names no instrument, "
+                                       "and a vendor's code is weaker than its product sheet",
 }
 
 
