@@ -23,6 +23,8 @@ rows) and rasterises on demand at the resolution asked, with anisotropic voxels
   ``.window(origin_nm, size_nm)``, ``.tilt_deg``, ``.depth_nm``, ``.number_density_per_nm2``.
 - :func:`flake_deposit` — draw a deposit (``mode="deposit"``) or a Boolean layer of flakes
   with uniform heights (``mode="boolean"``).
+- :func:`flake_deposit_capacity` — how full the deposit model fills a layer: the volume
+  fraction each of several reference cells holds before its first flake rises above the top.
 
 References
 ----------
@@ -49,7 +51,7 @@ from nmmm.microstructure.base import Microstructure, as_size_distribution, seed_
 from nmmm.microstructure.particles import SHAPES, ParticleSet
 from nmmm.spectra import check_fraction, check_positive
 
-__all__ = ["FlakeDeposit", "flake_deposit", "normal_rotations", "SEED_METALLIC_CELL_NM"]
+__all__ = ["FlakeDeposit", "flake_deposit", "flake_deposit_capacity", "normal_rotations", "SEED_METALLIC_CELL_NM"]
 
 #: The seed paper's metallic unit cell: 450 µm × 450 µm × 20 µm (nm).
 SEED_METALLIC_CELL_NM = (450_000.0, 450_000.0, 20_000.0)
@@ -232,11 +234,14 @@ def _footprint(x, y, nx, ny, nz, r, t, grid, gx, gy, periodic):
 
 
 @numba.njit(cache=True)
-def _deposit_kernel(xy, normals, radii, thick, gap, H, grid, periodic):
-    """Sequential rigid deposit on a height map; returns centre heights and final normals."""
+def _deposit_kernel(xy, normals, radii, thick, gap, H, grid, periodic, stop_above=np.inf):
+    """Sequential rigid deposit on a height map; returns centre heights and final normals.
+
+    With a finite ``stop_above`` the deposit stops at the first flake whose top rises above it
+    (its height is set; the later flakes' heights are left NaN): :func:`flake_deposit_capacity`."""
     n = xy.shape[0]
     gx, gy = H.shape
-    z = np.empty(n)
+    z = np.full(n, np.nan)
     out_normals = normals.copy()
     for p in range(n):
         nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
@@ -261,6 +266,8 @@ def _deposit_kernel(xy, normals, radii, thick, gap, H, grid, periodic):
                         if need > zc:
                             zc = need
         z[p] = zc
+        if zc + hz > stop_above:
+            break
         # second pass: raise the height map to the flake's upper surface
         for i in range(i0, i1 + 1):
             dx = (i + 0.5) * grid[0] - x
@@ -274,6 +281,110 @@ def _deposit_kernel(xy, normals, radii, thick, gap, H, grid, periodic):
                     if top > H[ii, jj]:
                         H[ii, jj] = top
     return z, out_normals
+
+
+def _draw_flakes(rng, n, box, ddist, tdist, tilt_std_deg):
+    """n i.i.d. flakes in the order the deposit lays them: positions, diameters, thicknesses,
+    tilts (half-normal of scale ``tilt_std_deg``, truncated at 80° by redrawing) and normals."""
+    xy = rng.random((n, 2)) * np.array(box[:2])
+    d = ddist.sample(rng, n)
+    t = tdist.sample(rng, n)
+    tilt = np.abs(rng.normal(0.0, math.radians(tilt_std_deg), n)) if tilt_std_deg > 0 else np.zeros(n)
+    for _ in range(100):  # truncate at 80 degrees by redrawing
+        bad = tilt > math.radians(80)
+        if not bad.any():
+            break
+        tilt[bad] = np.abs(rng.normal(0.0, math.radians(tilt_std_deg), bad.sum()))
+    tilt = np.minimum(tilt, math.radians(80))
+    phi = rng.uniform(0, 2 * np.pi, n)
+    normals = np.column_stack([np.sin(tilt) * np.cos(phi), np.sin(tilt) * np.sin(phi), np.cos(tilt)])
+    return xy, d, t, tilt, normals
+
+
+def _height_grid(box, ddist, grid_nm):
+    """Pixel (nm, per axis) and shape of the deposit's height map."""
+    if grid_nm is None:
+        grid_nm = min(ddist.mean_nm / 12, box[0] / 256, box[1] / 256)
+    g = np.atleast_1d(check_positive(grid_nm, "grid_nm")).astype(float)
+    g = np.resize(g, 2)
+    shape = (max(1, int(round(box[0] / g[0]))), max(1, int(round(box[1] / g[1]))))
+    if shape[0] * shape[1] > 64_000_000:
+        raise InvalidInputError(f"height map {shape} too large; use a coarser grid_nm")
+    return np.array(box[:2]) / np.array(shape), shape
+
+
+#: default number of deposits whose capacities :func:`flake_deposit_capacity` returns
+CAPACITY_REALISATIONS = 32
+#: entropy of the reference deposits of :func:`flake_deposit_capacity` (fixed: the capacity is the model's, not a
+#: seed's)
+CAPACITY_ENTROPY = 2012_0032
+
+
+def flake_deposit_capacity(
+    box_nm=SEED_METALLIC_CELL_NM,
+    diameter_nm=("lognormal", 20_000.0, 6_000.0),
+    thickness_nm=300.0,
+    tilt_std_deg: float = 3.0,
+    exclusion_nm: float = 100.0,
+    grid_nm=None,
+    periodic: bool = True,
+    realisations: int = CAPACITY_REALISATIONS,
+    seed=CAPACITY_ENTROPY,
+) -> np.ndarray:
+    """How full the deposit model can fill a layer: the capacity of ``realisations`` cells, sorted.
+
+    The deposit of :func:`flake_deposit` lays i.i.d. flakes one after the other, so a deposit of
+    ``n`` flakes holds them all exactly when the first ``n`` flakes of an endless sequence stay
+    below the top of the layer. One cell's *capacity* is the volume fraction (Σ π D²/4 · t / V)
+    of the flakes laid before the first one that rises above the layer (or, like
+    :func:`flake_deposit`, is taller than the layer by itself): a deposit of volume fraction φ in
+    that cell succeeds about when φ is below it. Each realisation lays a long sequence (drawn from
+    ``SeedSequence(seed, spawn_key=(k,))``) and stops at the first overflow, ~2-5 ms for a
+    450 µm cell.
+
+    The capacity is not a packing limit: rigid flakes resting on the highest point under them
+    make a rough surface, and the layer overflows where its highest tower (a large tilted flake
+    on a pile) reaches the top; the cell's capacity is therefore broad (the 20 µm × 300 nm
+    aluminium flakes of the grey metallic, 6° spread, 450 µm × 20 µm cell: ~0.011-0.024) and
+    falls as the cell grows (more towers to reach the top). Same arguments as
+    :func:`flake_deposit`.
+    """
+    box = tuple(float(b) for b in check_positive(np.asarray(box_nm, float), "box_nm"))
+    if len(box) != 3:
+        raise InvalidInputError(f"box_nm must be (Lx, Ly, layer thickness) in nm, got {box_nm!r}")
+    ddist = as_size_distribution(diameter_nm, "diameter_nm")
+    tdist = as_size_distribution(thickness_nm, "thickness_nm")
+    if not (math.isfinite(tilt_std_deg) and 0 <= tilt_std_deg <= 90):
+        raise InvalidInputError(f"tilt_std_deg must lie in [0, 90] degrees, got {tilt_std_deg!r}")
+    if not (math.isfinite(exclusion_nm) and exclusion_nm >= 0):
+        raise InvalidInputError(f"exclusion_nm must be >= 0 nm, got {exclusion_nm!r}")
+    realisations = int(realisations)
+    if realisations < 1:
+        raise InvalidInputError(f"realisations must be >= 1, got {realisations!r}")
+    g, shape = _height_grid(box, ddist, grid_nm)
+    vol = box[0] * box[1] * box[2]
+    mean_v = math.pi / 4 * ddist.moment(2) * tdist.mean_nm
+    n0 = max(64, int(math.ceil(0.05 * vol / mean_v)))  # 5 % by volume; doubled until the layer overflows
+    caps = np.empty(realisations)
+    for k in range(realisations):
+        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(k,)))
+        H = np.zeros(shape)
+        n, placed = n0, 0.0
+        while True:
+            xy, d, t, tilt, normals = _draw_flakes(rng, n, box, ddist, tdist, tilt_std_deg)
+            z, _ = _deposit_kernel(xy, normals, d / 2, t, float(exclusion_nm), H, g, periodic, box[2])
+            v = np.pi / 4 * d * d * t
+            top = z + d / 2 * np.sin(tilt) + t / 2 * np.cos(tilt)  # NaN after the first flake over the top
+            first = int(np.argmax(~(top <= box[2])))
+            if not (top[first] <= box[2]):
+                caps[k] = (placed + float(v[:first].sum())) / vol
+                break
+            placed += float(v.sum())
+            if placed >= vol or n > 5_000_000:  # the layer is solid flakes and still below the top
+                caps[k] = min(placed / vol, 1.0)
+                break
+            n *= 2
+    return np.sort(caps)
 
 
 def flake_deposit(
@@ -344,33 +455,17 @@ def flake_deposit(
     n = int(rng.poisson(lam))
     if n > 5_000_000:
         raise InvalidInputError(f"{n} flakes requested: reduce the cell or the density")
-    xy = rng.random((n, 2)) * np.array(box[:2])
-    d = ddist.sample(rng, n)
-    t = tdist.sample(rng, n)
-    tilt = np.abs(rng.normal(0.0, math.radians(tilt_std_deg), n)) if tilt_std_deg > 0 else np.zeros(n)
-    for _ in range(100):  # truncate at 80 degrees by redrawing
-        bad = tilt > math.radians(80)
-        if not bad.any():
-            break
-        tilt[bad] = np.abs(rng.normal(0.0, math.radians(tilt_std_deg), bad.sum()))
-    tilt = np.minimum(tilt, math.radians(80))
-    phi = rng.uniform(0, 2 * np.pi, n)
-    normals = np.column_stack([np.sin(tilt) * np.cos(phi), np.sin(tilt) * np.sin(phi), np.cos(tilt)])
+    xy, d, t, tilt, normals = _draw_flakes(rng, n, box, ddist, tdist, tilt_std_deg)
     hz = d / 2 * np.sin(tilt) + t / 2 * np.cos(tilt)
     if np.any(2 * hz > box[2]):
-        raise InvalidInputError(
+        err = InvalidInputError(
             f"some flakes (tilted diameter up to {2 * hz.max():.4g} nm) do not fit in the layer thickness "
             f"{box[2]:.4g} nm; reduce tilt_std_deg or the diameters, or thicken the layer"
         )
+        err.n_flakes, err.n_fit = n, int(np.argmax(2 * hz > box[2]))  # the layer overflows at that flake
+        raise err
     if mode == "deposit":
-        if grid_nm is None:
-            grid_nm = min(ddist.mean_nm / 12, box[0] / 256, box[1] / 256)
-        g = np.atleast_1d(check_positive(grid_nm, "grid_nm")).astype(float)
-        g = np.resize(g, 2)
-        shape = (max(1, int(round(box[0] / g[0]))), max(1, int(round(box[1] / g[1]))))
-        if shape[0] * shape[1] > 64_000_000:
-            raise InvalidInputError(f"height map {shape} too large; use a coarser grid_nm")
-        g = np.array(box[:2]) / np.array(shape)
+        g, shape = _height_grid(box, ddist, grid_nm)
         H = np.zeros(shape)
         z, normals = _deposit_kernel(xy, normals, d / 2, t, float(exclusion_nm), H, g, periodic)
         hz = d / 2 * np.sqrt(np.clip(1 - normals[:, 2] ** 2, 0, 1)) + t / 2 * normals[:, 2]
