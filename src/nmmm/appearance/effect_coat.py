@@ -19,8 +19,9 @@ Derivation (``derive=``)
 ------------------------
 ``"deposit"`` (default): the flakes of a :func:`nmmm.microstructure.flake_deposit` in a
 ``cell_nm`` × coat-thickness cell (Couka, Willot & Jeulin 2012). The deposit places every
-flake drawn (or refuses a coat it cannot hold, naming the largest fraction that fits) and lets
-flakes fall without rotating them, so the ensemble τ is φ H / t and the area-weighted tilt law
+flake drawn (or refuses a coat it cannot hold, naming the largest fraction that fits: the median
+capacity of fixed reference cells of the composition, the same verdict and limit for every seed —
+:meth:`EffectCoat.deposit`) and lets flakes fall without rotating them, so the ensemble τ is φ H / t and the area-weighted tilt law
 is the drawn half-normal one; both are used as such — one cell's τ (Poisson count of ~300-800
 flakes × log-normal areas, ±5 %) and a kernel estimate of its tilts made L*(15°) jump by up to
 2.4 between fractions 1 % apart and spread it by ~2 over seeds. The depth profile is the uniform
@@ -63,6 +64,18 @@ __all__ = ["FlakeSpec", "EffectCoat", "DerivedFlakeLayer"]
 
 #: deposits whose depth bands are averaged for the derived flake band (EffectCoat._realisation_stats)
 BAND_REALISATIONS = 32
+
+#: reference deposits whose capacities give the largest fraction the deposit model holds (EffectCoat.deposit_limit)
+CAPACITY_REALISATIONS = 64
+
+#: deposits tried, from seeds derived from the coat's seed, before a fraction under the limit is given up
+DEPOSIT_TRIES = 64
+
+#: spawn key of the retried deposits (the band's realisations use spawn keys (1,) … (31,))
+_RETRY_KEY = 18_0018
+
+#: capacities of the deposit model per composition (box, diameters, thickness, tilt): EffectCoat.deposit_limit
+_CAPACITY_CACHE: dict = {}
 
 #: thinnest layer of a layered flake that is still a film (about one oxide unit cell)
 _MIN_LAYER_NM = 1.0
@@ -353,7 +366,11 @@ class EffectCoat:
     def _check_packing(self):
         """A layer of flakes tilted by θ stacks at least t cos θ + D sin θ high per flake
         (a flake's vertical extent), so the densest fraction the coat can hold is
-        φ_max = t / ⟨t cos θ + D sin θ⟩ over the tilt law (and never above 1)."""
+        φ_max = t / ⟨t cos θ + D sin θ⟩ over the tilt law (and never above 1).
+
+        A cheap check at construction for both derivations; the rigid deposit holds far less (its
+        surface is rough: 0.019 against 0.153 for the grey metallic's flakes), and ``derive="deposit"``
+        refuses above its own limit (:meth:`deposit_limit`) when the deposit is drawn."""
         fl = self.flakes
         tilt = fl.tilt_distribution()
         th = np.radians(tilt.tilt_deg)
@@ -369,31 +386,94 @@ class EffectCoat:
                 f"{phi_max:.3g}; lower the fraction or the tilt spread")
 
     # -- derivation --------------------------------------------------------------------
+    def _box(self):
+        return (float(self.cell_nm[0]), float(self.cell_nm[1]), float(self.coat_thickness_nm))
+
     def _draw_deposit(self, seed):
         from nmmm.microstructure import flake_deposit
 
         fl = self.flakes
-        box = (float(self.cell_nm[0]), float(self.cell_nm[1]), float(self.coat_thickness_nm))
-        return flake_deposit(box_nm=box, diameter_nm=fl.diameter_distribution(), thickness_nm=float(fl.thickness_nm),
-                             fraction=float(fl.fraction), tilt_std_deg=float(fl.tilt_std_deg), seed=seed)
+        return flake_deposit(box_nm=self._box(), diameter_nm=fl.diameter_distribution(),
+                             thickness_nm=float(fl.thickness_nm), fraction=float(fl.fraction),
+                             tilt_std_deg=float(fl.tilt_std_deg), seed=seed)
+
+    def deposit_capacities(self) -> np.ndarray:
+        """Capacities (volume fractions, sorted) of :data:`CAPACITY_REALISATIONS` reference cells of the
+        deposit model for these flakes, tilt spread, coat and cell
+        (:func:`nmmm.microstructure.flakes.flake_deposit_capacity`, fixed reference seeds); computed
+        once per composition (~0.2 s) and cached — the fraction and the coat's seed play no part."""
+        from nmmm.microstructure.flakes import flake_deposit_capacity
+
+        fl = self.flakes
+        key = (self._box(), float(fl.diameter_um), float(fl.diameter_std_um), float(fl.thickness_nm),
+               float(fl.tilt_std_deg))
+        if key not in _CAPACITY_CACHE:
+            caps = flake_deposit_capacity(box_nm=key[0], diameter_nm=fl.diameter_distribution(),
+                                          thickness_nm=key[3], tilt_std_deg=key[4],
+                                          realisations=CAPACITY_REALISATIONS)
+            caps.flags.writeable = False
+            _CAPACITY_CACHE[key] = caps
+        return _CAPACITY_CACHE[key]
+
+    def deposit_limit(self) -> float:
+        """The largest flake fraction the deposit model holds in this coat: the median capacity of
+        :meth:`deposit_capacities` (the fraction at which half of the model's cells of this size
+        hold all their flakes), rounded down to 3 significant digits — the value the error names."""
+        med = float(np.median(self.deposit_capacities()))
+        if not med > 0:
+            return 0.0
+        q = 10.0 ** (math.floor(math.log10(med)) - 2)
+        return float(f"{math.floor(med / q + 1e-9) * q:.3g}")
 
     def deposit(self):
-        """The flake deposit of the basecoat (:func:`nmmm.microstructure.flake_deposit`), cached."""
+        """The flake deposit of the basecoat (:func:`nmmm.microstructure.flake_deposit`), cached.
+
+        Whether a fraction fits does not depend on the seed. A rigid deposit overflows where its
+        roughest tower reaches the top of the coat, so one cell's capacity is broad (pearl of the
+        shipped recipe: ~0.015-0.035) and a fraction near a full coat used to be accepted or refused
+        by the seed (grey metallic at its 0.008: seed 2 refused; pearl at 0.02: ~1 seed in 4). The rule:
+
+        - above :meth:`deposit_limit` (the median capacity of fixed reference cells of this
+          composition) the fraction is refused — ``flakes.fraction``, the value given and the limit;
+        - at or below it the deposit of ``seed`` is drawn; if that cell overflows, deposits from seeds
+          derived from it (``SeedSequence(seed, spawn_key=(_RETRY_KEY, j))``, j = 1 …
+          :data:`DEPOSIT_TRIES` − 1) are tried in turn and the first that holds every flake is the
+          cell. Each holds them with probability >= ~1/2 at the limit, so all fail about once in 2⁶⁴.
+
+        A seed whose own deposit fits keeps it (the cell is unchanged); the ensemble values of
+        :meth:`derived` do not depend on the cell at all."""
         if "deposit" not in self._memo:
-            try:
-                dep = self._draw_deposit(self.seed)
-            except InvalidInputError as exc:
-                msg = str(exc)
-                n_drawn, n_fit = getattr(exc, "n_flakes", 0), getattr(exc, "n_fit", 0)
-                most = ""
-                if n_drawn > 0:
-                    phi_max = float(self.flakes.fraction) * n_fit / n_drawn
-                    most = (f" (at most about {phi_max:.3g} of these flakes fit this {self.coat_thickness_nm / 1e3:g} µm "
-                            f"coat with seed {self.seed})")
-                raise InvalidInputError(f"flakes.fraction: the deposit model cannot place these flakes in the coat: "
-                                        f"{float(self.flakes.fraction):g} given{most}; {msg}") from None
+            fl = self.flakes
+            phi = float(fl.fraction)
+            limit = self.deposit_limit()
+            if phi > limit:
+                raise InvalidInputError(self._overflow_message(phi, limit))
+            last = None
+            for j in range(DEPOSIT_TRIES):
+                seed = self.seed if j == 0 else np.random.SeedSequence(
+                    None if self.seed is None else int(self.seed), spawn_key=(_RETRY_KEY, j))
+                try:
+                    dep = self._draw_deposit(seed)
+                    break
+                except InvalidInputError as exc:
+                    if not hasattr(exc, "n_fit"):  # not an overflow: the same on every try
+                        raise InvalidInputError(f"flakes.fraction: the deposit model cannot place these flakes in the "
+                                                f"coat: {phi:g} given; {exc}") from None
+                    last = exc
+            else:
+                raise InvalidInputError(self._overflow_message(phi, limit) + f"; none of {DEPOSIT_TRIES} deposits of "
+                                        f"this fraction held all its flakes ({last})")
             self._memo["deposit"] = dep
         return self._memo["deposit"]
+
+    def _overflow_message(self, phi, limit):
+        fl = self.flakes
+        cell = "×".join(f"{float(c) / 1e3:g}" for c in self.cell_nm)
+        return (f"flakes.fraction: the deposit model cannot place these flakes in the coat: {phi:g} given, at most "
+                f"{limit:.3g} of these {float(fl.diameter_um):g} µm × {float(fl.thickness_nm):g} nm flakes fit this "
+                f"{self.coat_thickness_nm / 1e3:g} µm coat at a tilt spread of {float(fl.tilt_std_deg):g}° (the "
+                f"fraction at which half of the model's {cell} µm cells hold all their flakes); lower the fraction or "
+                "the tilt spread, or thicken the coat")
 
     def flake_list(self):
         """The discrete flakes (:class:`nmmm.appearance.flakes.FlakeList`) of one cell: the
