@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.appearance.brdf.interpolation import _deg, _lerp1, _lerp_table
-from nmmm.appearance.brdf.ms_azimuth import gauss_nodes
+from nmmm.appearance.brdf.ms_azimuth import flake_kernels, gauss_nodes
 
 
 def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 96, n_phi: int = 96, n_doublings: int = 16):
@@ -43,7 +43,8 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 96, n_phi: int = 96, 
     s is the same transport's single light (one flake mirror, the base seen straight), not the exact
     terms-2–3 albedo ``sub`` (no longer used): the node quadrature's error on the single light falls
     on e − s otherwise (issue 18: the Fe2O3/mica pearl's multiple term 20 % low, see
-    :mod:`~nmmm.appearance.brdf.coat_transport`). 96 × 96 nodes (polar × azimuth), as coat_transport.
+    :mod:`~nmmm.appearance.brdf.coat_transport`). 96 × 96 nodes (polar × azimuth), and the flake kernel
+    of :func:`~nmmm.appearance.brdf.ms_azimuth.flake_kernels` (mode 0), as coat_transport.
 
     This replaced a bounce model keeping only single flake scattering per pass, which
     lost 20–40 % of the lossless light per bounce and overestimated F_ms for absorbing
@@ -53,20 +54,7 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 96, n_phi: int = 96, 
     n, L = tab.n, tab.L
     th, mu, sn, dmu = gauss_nodes(n_mu, n)  # internal polar nodes, split at the critical angle
     a_mu = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu  # flake extinction per unit τ
-    ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi  # azimuth differences in [0, π), weights ×2
-    uk = np.stack([sn, 0 * sn, -mu], -1)  # incoming travel directions (downward)
-    G = np.zeros((2, 2, n_mu, n_mu, L))  # [up/down out][actual/lossless], (j out, k in, L)
-    for q in ph:
-        for s_out, sz in enumerate((1.0, -1.0)):
-            uj = np.stack([sn * np.cos(q), sn * np.sin(q), sz * mu], -1)
-            hv = uj[:, None, :] - uk[None, :, :]  # ∥ the mirror's normal
-            hn = np.linalg.norm(hv, axis=-1)
-            hn = np.where(hn > 1e-12, hn, 1.0)
-            c = np.abs(np.sum(hv * uk[None, :, :], axis=-1)) / hn
-            wgt = tab.tilt.pdf(np.abs(hv[..., 2]) / hn) / (4 * mu[None, :]) * (dmu[:, None] * 2 * np.pi / n_phi)
-            dc = _deg(c.ravel())
-            G[s_out, 0] += wgt[..., None] * _lerp_table(tab.Rf, dc, tab.step).reshape(wgt.shape + (L,))
-            G[s_out, 1] += wgt[..., None] * _lerp_table(tab.Rf0, dc, tab.step).reshape(wgt.shape + (L,))
+    G = flake_kernels(tab, mu, sn, dmu, 0, n_phi)[0]  # [up/down out][actual/lossless], (j out, k in, L)
     # the lossless kernel removes exactly a(μ)/μ · (1 − T̄(μ, λ)) per unit τ (corrects the quadrature)
     target = a_mu[:, None] * tab.extinction_ratio(np.degrees(th))  # (k, L): extinction per unit τ per direction
     col0 = (G[0, 1] + G[1, 1]).sum(axis=0)
