@@ -36,6 +36,7 @@ from nmmm.appearance.brdf.ms_azimuth import N_MODES, flake_kernels, gauss_nodes,
 _N_MU = 96  # polar nodes (half in the escape cone)
 _N_PHI = 96  # azimuths of the flake kernel over [0, π)
 _MAX_STEP = 0.03  # largest extinction per doubling seed slab
+_N_LOBE_NODES = 9  # wavelength nodes of the lobe's shape tables
 
 
 def pigment_kernels(g, mu, sn, dmu, n_modes, n_phi=48):
@@ -101,35 +102,56 @@ def _single_escape(tab, G_mirror, fext, v, Tint, D, d0, lamb, inv_mu, z0, dz):
 
 def coat_transport(tab, n_modes: int = N_MODES, n_mu: int = _N_MU):
     """F_ms(λ) of a paint with a coat medium (see the module docstring); the azimuthal modes
-    c_m(θi, θo) of its lobe at up to 9 wavelength nodes (indices ``tab._ms_nodes``) are stored
-    on ``tab._ms_modes_spectral`` ``(NA, NA, K, n_modes)``, linear in λ between nodes. F_ms
-    subtracts the transport's own single light, not the exact terms-2–3 albedo (module docstring)."""
+    c_m(θi, θo) of its lobe at up to 9 wavelength nodes (indices ``tab._ms_nodes``, placed by
+    :func:`_lobe_nodes`) are stored on ``tab._ms_modes_spectral`` ``(NA, NA, K, n_modes)``, linear in
+    λ between nodes. F_ms subtracts the transport's own single light, not the exact terms-2–3 albedo
+    (module docstring). Mode 0 is solved at every wavelength, the modes m ≥ 1 (flake and pigment
+    kernels included) at the nodes only."""
     L, n = tab.L, tab.n
     th, mu, sn, dmu = gauss_nodes(n_mu, tab.n)
     eye = np.eye(n_mu)
     z0, dz = tab.z0, tab.dz
     flakes = tab.has_flakes
-    P = pigment_kernels(tab.g_pig, mu, sn, dmu, n_modes)
+    li = np.arange(L)
+    # mode 0 at every wavelength (F_ms, and the lobe's polar shape that places the wavelength nodes);
+    # the modes m ≥ 1 only at the nodes (below)
+    scatters = bool(np.any(np.asarray(tab.kap_s) > 0))  # without pigment scattering its kernels are zeros
+
+    def pigment_part(n_m, idx):
+        if scatters:
+            return pigment_kernels(np.asarray(tab.g_pig, float)[idx], mu, sn, dmu, n_m)
+        return np.zeros((n_m + 1, 2, n_mu, n_mu, li[idx].size))
+
+    P0 = pigment_part(0, li)
     if flakes:
-        G = flake_kernels(tab, mu, sn, dmu, n_modes, n_phi=_N_PHI)  # (M+1, up/down, actual/lossless, j, k, L)
         eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu
         target = eps[:, None] * tab.extinction_ratio(np.degrees(th))  # (k, L) per unit τ
-        col0 = G[0, :, 1].sum(axis=(0, 1))
-        G *= np.where(col0 > 0, target / np.where(col0 > 0, col0, 1.0), 0.0)[None, None, None, None]
-        fe = getattr(tab, "edge", 0.0)
-        if fe > 0:  # rims: a fraction fe of the flake interactions scattered diffusely
-            G *= 1.0 - fe
-        G_mirror = G[:, 0].copy() if fe > 0 else G[:, 0]  # (M+1, variant, j, k, L) upward, mirrors only: term 2's light
-        if fe > 0:
-            # a rim takes light in proportion to the flakes' projected area a(μ_k) and sends it, up or
-            # down, in proportion to a(μ_j): reciprocal (isotropic emission would not be: it gives
-            # f ∝ a(μi)/μi/μo for a thin layer, not symmetric); no azimuth memory (mode 0 only)
-            em = eps * mu * dmu  # a(μ_j) dμ_j
-            em = em / (2.0 * em.sum())  # columns sum to 1 over up and down
-            for v, alb in enumerate((tab.edge_albedo, np.ones(L))):
-                G[0, :, v] += em[None, :, None, None] * (fe * target * alb[None, :])[None, None]
+
+        def flake_part(n_m, idx):
+            """The flake kernel, modes 0 … n_m, wavelengths idx: (G, G_mirror), G (M+1, up/down,
+            actual/lossless, j, k, K), renormalised to the extinction, rims added to mode 0."""
+            G = flake_kernels(tab, mu, sn, dmu, n_m, n_phi=_N_PHI, wl=idx)
+            tg = target[:, idx]
+            col0 = G[0, :, 1].sum(axis=(0, 1))
+            G *= np.where(col0 > 0, tg / np.where(col0 > 0, col0, 1.0), 0.0)[None, None, None, None]
+            fe = getattr(tab, "edge", 0.0)
+            if fe > 0:  # rims: a fraction fe of the flake interactions scattered diffusely
+                G *= 1.0 - fe
+            G_mirror = G[:, 0].copy() if fe > 0 else G[:, 0]  # (M+1, variant, j, k, K) upward, mirrors only
+            if fe > 0:
+                # a rim takes light in proportion to the flakes' projected area a(μ_k) and sends it, up or
+                # down, in proportion to a(μ_j): reciprocal (isotropic emission would not be: it gives
+                # f ∝ a(μi)/μi/μo for a thin layer, not symmetric); no azimuth memory (mode 0 only)
+                em = eps * mu * dmu  # a(μ_j) dμ_j
+                em = em / (2.0 * em.sum())  # columns sum to 1 over up and down
+                for v, alb in enumerate((tab.edge_albedo[idx], np.ones(tg.shape[1]))):
+                    G[0, :, v] += em[None, :, None, None] * (fe * tg * alb[None, :])[None, None]
+            return G, G_mirror
+
+        G0, G0_mirror = flake_part(0, li)
         fext = np.moveaxis(target, -1, 0) * tab.tau  # (L, k) through the whole band
     else:
+        G0 = G0_mirror = None
         fext = np.zeros((L, n_mu))
     mu_c = np.sqrt(1 - 1 / (n * n))
     mu_ext = np.sqrt(np.clip(1 - n * n * (1 - mu * mu), 0, 1))
@@ -142,18 +164,18 @@ def coat_transport(tab, n_modes: int = N_MODES, n_mu: int = _N_MU):
     ks = np.asarray(tab.kap_s, float)[:, None, None]
     inv_mu = (1.0 / mu)[None, :]
 
-    def system(m, v, sel=slice(None)):
+    def system(m, v, idx, P, G):
         """Internal reflection of the whole coat (with the substrate for m = 0), mode m,
-        variant v (0 actual, 1 lossless), wavelengths ``sel``."""
-        kap = (tab.kappa if v == 0 else tab.kappa0)[sel][:, None]
-        rho = (tab.rho if v == 0 else np.ones(L))[sel]
-        Pu = np.moveaxis(P[m, 0][..., sel], -1, 0) * ks[sel]
-        Pd = np.moveaxis(P[m, 1][..., sel], -1, 0) * ks[sel]
+        variant v (0 actual, 1 lossless), wavelengths ``idx`` (P and G hold only those)."""
+        kap = (tab.kappa if v == 0 else tab.kappa0)[idx][:, None]
+        rho = (tab.rho if v == 0 else np.ones(L))[idx]
+        Pu = np.moveaxis(P[m, 0], -1, 0) * ks[idx]
+        Pd = np.moveaxis(P[m, 1], -1, 0) * ks[idx]
         Rbelow = rho[:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None] if m == 0 else 0 * Pu
         if flakes:  # bottom first: pigment below the band, the band, pigment above it
-            Fu = np.moveaxis(G[m, 0, v][..., sel], -1, 0) * (tab.tau / dz)
-            Fd = np.moveaxis(G[m, 1, v][..., sel], -1, 0) * (tab.tau / dz)
-            layers = [(Pu, Pd, kap * inv_mu, 1.0 - z0 - dz), (Fu + Pu, Fd + Pd, fext[sel] / dz + kap * inv_mu, dz),
+            Fu = np.moveaxis(G[m, 0, v], -1, 0) * (tab.tau / dz)
+            Fd = np.moveaxis(G[m, 1, v], -1, 0) * (tab.tau / dz)
+            layers = [(Pu, Pd, kap * inv_mu, 1.0 - z0 - dz), (Fu + Pu, Fd + Pd, fext[idx] / dz + kap * inv_mu, dz),
                       (Pu, Pd, kap * inv_mu, z0)]
         else:
             layers = [(Pu, Pd, kap * inv_mu, 1.0)]
@@ -163,45 +185,75 @@ def coat_transport(tab, n_modes: int = N_MODES, n_mu: int = _N_MU):
                 Rbelow = _on_top(R, T, Rbelow)
         return Rbelow
 
-    escaped = []
+    escaped, Rtot0 = [], []
     for v in (0, 1):
-        Rtot = system(0, v)
+        Rtot = system(0, v, li, P0, G0)
+        Rtot0.append(Rtot)
         u = np.linalg.solve(eye[None] - Rtot * D[:, None, :], np.einsum("ljk,lk->lj", Rtot, d0)[..., None])[..., 0]
         escaped.append(np.sum(Tint * u, axis=1))
     e, e0 = escaped
     # what terms 2–3 hold, from the same node transport (one flake mirror and no pigment scattering;
     # the substrate seen without any scattering, the coat's underside included), escaping under diffuse
     # incidence: F_ms = (e − s) / (e0 − s0) with this s, not the exact terms-2–3 albedo
-    s, s0 = (_single_escape(tab, G_mirror if flakes else None, fext, v, Tint, D, d0, lamb, inv_mu, z0, dz)
-             for v in (0, 1))
+    s, s0 = (_single_escape(tab, G0_mirror, fext, v, Tint, D, d0, lamb, inv_mu, z0, dz) for v in (0, 1))
     with np.errstate(divide="ignore", invalid="ignore"):
         F = np.clip(np.where(e0 - s0 > 1e-12, (e - s) / (e0 - s0), 0.0), 0.0, 1.0)
-    # --- azimuthal modes of the multiply scattered part (a few wavelengths suffice: one shape)
-    sel = np.unique(np.linspace(0, L - 1, min(L, 9)).round().astype(int))
-    Ds = D[sel][:, None, :]
-    kap = tab.kappa[sel][:, None]
     s2 = inv_mu.T + inv_mu  # (j, k) 1/μ_j + 1/μ_k
-    with_coat = lambda Rt: np.linalg.solve(eye[None] - Rt * Ds, Rt)  # noqa: E731
-    def multiply_scattered(m, v):
-        """M_m: the coat's internal reflection (underside included), mode m, variant v, less
-        what terms 2–3 hold (one flake mirror and no pigment scattering; the substrate seen
-        without any scattering). A rim's light, scattered once, stays in M as it does in F_ms."""
-        kapv = (tab.kappa if v == 0 else tab.kappa0)[sel][:, None]
-        Mm = with_coat(system(m, v, sel))
+
+    def multiply_scattered(m, v, idx, Rt, G_mirror):
+        """M_m: the coat's internal reflection Rt (mode m, variant v, wavelengths idx) with its underside,
+        less what terms 2–3 hold (one flake mirror and no pigment scattering; the substrate seen without
+        any scattering). A rim's light, scattered once, stays in M as it does in F_ms."""
+        Ds = D[idx][:, None, :]
+        with_coat = lambda X: np.linalg.solve(eye[None] - X * Ds, X)  # noqa: E731
+        kapv = (tab.kappa if v == 0 else tab.kappa0)[idx][:, None]
+        Mm = with_coat(Rt)
         if flakes:
-            Ku = np.moveaxis(G_mirror[m, v][..., sel], -1, 0)
-            fs = fext[sel][:, :, None] + fext[sel][:, None, :]
+            Ku = np.moveaxis(G_mirror[m, v], -1, 0)
+            fs = fext[idx][:, :, None] + fext[idx][:, None, :]
             x = fs + kapv[:, :, None] * dz * s2[None]
             Mm = Mm - Ku * tab.tau * np.exp(-kapv[:, :, None] * z0 * s2[None]) * -np.expm1(-x) / np.where(x > 0, x, 1.0)
         if m == 0:
-            tdir = np.exp(-fext[sel] - kapv * inv_mu)
-            rhov = (tab.rho if v == 0 else np.ones(L))[sel]
+            tdir = np.exp(-fext[idx] - kapv * inv_mu)
+            rhov = (tab.rho if v == 0 else np.ones(L))[idx]
             Rb = rhov[:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
             Mm = Mm - with_coat(tdir[:, :, None] * Rb * tdir[:, None, :])
         return Mm
 
-    ms = [multiply_scattered(m, 0) for m in range(n_modes + 1)]
-    ms_lossless = multiply_scattered(0, 1)
-    lobe_tables(tab, F, sel, ms, ms_lossless, th, mu, dmu)
+    # --- the lobe's wavelength nodes: its polar shape at every wavelength, nodes where linear
+    # interpolation misses its directional amount most (_lobe_nodes)
+    ms0 = multiply_scattered(0, 0, li, Rtot0[0], G0_mirror)
+    ms0_lossless = multiply_scattered(0, 1, li, Rtot0[1], G0_mirror)
+    sel = _lobe_nodes(tab, F, ms0, ms0_lossless, th, mu, dmu, min(L, _N_LOBE_NODES))
+    # --- azimuthal modes m ≥ 1 of the multiply scattered part at the nodes only
+    ms = [ms0[sel]]
+    if n_modes > 0:
+        Pm = pigment_part(n_modes, sel)
+        Gm, Gm_mirror = flake_part(n_modes, sel) if flakes else (None, None)
+        ms += [multiply_scattered(m, 0, sel, system(m, 0, sel, Pm, Gm), Gm_mirror) for m in range(1, n_modes + 1)]
+    lobe_tables(tab, F, sel, ms, ms0_lossless[sel], th, mu, dmu)
     return F
 
+
+def _lobe_nodes(tab, F, ms0, ms0_lossless, th, mu, dmu, K):
+    """K wavelength indices for the lobe's shape tables, linear in λ between them: the ends, then one at
+    a time where the interpolated directional factor ``ms_albedo_factor`` (from the polar shape c_0 at
+    every wavelength) is furthest from its value there. The Fe2O3/mica pearl's factor at θi = 0 runs
+    0.80 … 0.94 over 480–630 nm, not linearly: 9 evenly spaced nodes missed it by up to 0.015 (0.007,
+    0.8 % of its multiple term at 550 nm), these 9 by 0.005. Evenly spaced where the factor is linear."""
+    L = F.size
+    even = np.unique(np.linspace(0, L - 1, K).round().astype(int))
+    if K >= L or K < 3:
+        return even
+    li = np.arange(L)
+    lobe_tables(tab, F, li, [ms0], ms0_lossless, th, mu, dmu)
+    fac = tab.ms_albedo_factor  # (NA, L)
+    nodes = [0, L - 1]
+    while len(nodes) < K:
+        nd = np.array(nodes)
+        err = np.max(np.abs(np.stack([np.interp(li, nd, f[nd]) for f in fac]) - fac), axis=0)
+        j = int(np.argmax(err))
+        if err[j] <= 1e-9:
+            return even
+        nodes = sorted(nodes + [j])
+    return np.array(nodes)

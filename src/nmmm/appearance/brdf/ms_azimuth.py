@@ -93,7 +93,7 @@ def gauss_nodes(n_mu: int = 48, n: float | None = None):
 
 
 def flake_kernels(tab, mu, sn, dmu, n_modes: int = 0, n_phi: int = 32, lossless: bool = True,
-                  core_deg: tuple[float, float] | None = _CORE_DEG):
+                  core_deg: tuple[float, float] | None = _CORE_DEG, wl=None):
     """Oriented-mirror scattering per unit flake optical depth, Fourier modes m = 0 … n_modes
     in the azimuth difference: ``G[m, up/down, actual/lossless, j, k, L]`` = ∫ kernel ·
     cos(m φ) dφ · dμ_j (photons from node k travelling down into node j travelling up/down).
@@ -106,8 +106,11 @@ def flake_kernels(tab, mu, sn, dmu, n_modes: int = 0, n_phi: int = 32, lossless:
     meets at an azimuth ∝ sin θ_k. The point quadrature over-integrated it by up to 9 % near the
     normal (96 × 96 nodes, the Fe2O3/mica pearl), undone by the renormalisation of the columns but
     not in the kernel's shape: the multiple term at θi = 0 was 1.5–3.3 % (8–13 SE) above the tracer's
-    (issue 18). ``core_deg=None``: the point quadrature everywhere."""
-    L, n_mu = tab.L, mu.size
+    (issue 18). ``core_deg=None``: the point quadrature everywhere. ``wl``: only these wavelength
+    indices (the last axis of G), e.g. the lobe's nodes for the modes m ≥ 1."""
+    wl = slice(None) if wl is None else np.asarray(wl)
+    Rts = (tab.Rf[:, wl], tab.Rf0[:, wl])
+    L, n_mu = Rts[0].shape[1], mu.size
     ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi  # [0, π), the kernel is even in φ
     uk = np.stack([sn, 0 * sn, -mu], -1)
     nv = 2 if lossless else 1
@@ -126,12 +129,11 @@ def flake_kernels(tab, mu, sn, dmu, n_modes: int = 0, n_phi: int = 32, lossless:
                 pdf = pdf * (1.0 - _core_weight(np.degrees(np.arccos(np.clip(hz, -1.0, 1.0))), core_deg))
             wgt = pdf / (4 * mu[None, :]) * (dmu[:, None] * 2 * np.pi / n_phi)
             dc = _deg(c.ravel())
-            tabs = (tab.Rf, tab.Rf0)[:nv]
-            for v, Rt in enumerate(tabs):
+            for v, Rt in enumerate(Rts[:nv]):
                 contrib = wgt[..., None] * _lerp_table(Rt, dc, tab.step).reshape(wgt.shape + (L,))
                 G[:, s_out, v] += cm[:, iq, None, None, None] * contrib[None]
     if core_deg is not None:
-        G += _core_kernel(tab, mu, sn, dmu, n_modes, nv, core_deg)
+        G += _core_kernel(tab, mu, sn, dmu, n_modes, nv, core_deg, Rts)
     return G
 
 
@@ -154,17 +156,17 @@ def _node_cells(mu, dmu, mu_c):
     return hi, hi - dmu
 
 
-def _core_kernel(tab, mu, sn, dmu, n_modes, nv, core_deg, n_theta: int = 16, n_phi: int = 48, n_sub: int = 4):
+def _core_kernel(tab, mu, sn, dmu, n_modes, nv, core_deg, Rts, n_theta: int = 16, n_phi: int = 48, n_sub: int = 4):
     """The nearly flat flakes' part of :func:`flake_kernels`, χ(θ_h) p(h), as a transfer between the nodes'
     cells (:func:`_node_cells`): photons spread evenly over node k's cell (``n_sub`` incidences), each
     normal from a Gauss–Legendre rule in the tilt over [0, core_deg[1]] (the measure p(θ) sin θ dθ is
     finite where p per sr is not) and uniform in its azimuth, the mirror direction counted in the cell
     it falls in, its azimuth φ giving cos(m φ) exactly. Read along a row (the radiance of a node) or a
     column (where a node's photons go) it is the same cell average: the point kernel's 1/r peak at the
-    mirror direction is right in neither."""
+    mirror direction is right in neither. ``Rts``: the flake reflectances (actual, lossless), (NT, L)."""
     from scipy import sparse
 
-    L, n_mu = tab.L, mu.size
+    L, n_mu = Rts[0].shape[1], mu.size
     n = getattr(tab, "n", 1.0)
     mu_c = np.sqrt(1.0 - 1.0 / (n * n)) if n > 1.0 else -1.0
     hi, lo = _node_cells(mu, dmu, mu_c)
@@ -191,7 +193,7 @@ def _core_kernel(tab, mu, sn, dmu, n_modes, nv, core_deg, n_theta: int = 16, n_p
         row = (np.where(out[..., 2] > 0, 0, 1) * n_mu + j) * n_mu + kk  # (up/down, j, k)
         D = sparse.csr_matrix((w.ravel(), (row.ravel(), np.arange(c.size))), shape=(2 * n_mu * n_mu, c.size))
         dc = _deg(np.abs(c).ravel())
-        for v, Rt in enumerate((tab.Rf, tab.Rf0)[:nv]):
+        for v, Rt in enumerate(Rts[:nv]):
             R = _lerp_table(Rt, dc, tab.step)  # (k S, L)
             for m in range(n_modes + 1):
                 G[m, :, v] += (D @ (np.cos(m * phi_o).ravel()[:, None] * R)).reshape(2, n_mu, n_mu, L)
