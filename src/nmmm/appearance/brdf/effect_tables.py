@@ -28,15 +28,10 @@ from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
 from nmmm.appearance.brdf.coat_transport import coat_transport
 from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
 from nmmm.appearance.brdf.interpolation import _NA, _deg, _hemi_mean, _lerp1, _lerp_table
-from nmmm.appearance.brdf.ms_azimuth import _CHUNK_PAIRS, _lobe_at_wavelengths_nb, _node_runs, _node_weights, lobe_factor
+from nmmm.appearance.brdf.fused_kernel import evaluate_effect
+from nmmm.appearance.brdf.ms_azimuth import lobe_factor
 from nmmm.appearance.brdf.tables import _Tables
 from nmmm.appearance.flakes import refract_in
-
-try:  # pragma: no cover - numba is a dependency, the fallback only guards odd installs
-    import numba as _nb
-except ImportError:  # pragma: no cover
-    _nb = None
-
 
 _NS2 = 2048
 
@@ -138,26 +133,8 @@ class _EffectTables(_Tables):
 
     # -- evaluation ------------------------------------------------------------------
     def evaluate_fast(self, wi, wo, comps, out):
-        Rf = self.Rf if self.has_flakes else np.zeros((2, self.L))
-        a_tab = self.a_tab if self.has_flakes else np.zeros(2)
-        den = self.tilt.density if self.has_flakes else np.zeros(2)
-        dstep = (self.tilt.tilt_deg[1] - self.tilt.tilt_deg[0]) if self.has_flakes else 1.0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            kb = np.where(self.rho > 0, self.rho / (np.pi * (1 - self.rho * self.r_t)), 0.0)
-        C = self._ms_modes_spectral
-        do_ms = "multiple" in comps and bool(np.any(self.Kms > 0)) and C.shape[-1] > 0
-        lk, lw = _node_weights(self)
-        kap = np.asarray(self.kappa, float)
-        Kms = np.asarray(self.Kms, float) if "multiple" in comps else np.zeros(self.L)
-        if "base" not in comps:
-            kb = np.zeros(self.L)
-        _effect_kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
-                       self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
-                       np.ascontiguousarray(self.tau_e, float), self.ext_tab, self._ext_exp(), kap * self.dz,
-                       self._Qd, self._Qz, self._Qb,
-                       self._s2_step, bool(self.tau_e_const), self.z0, self.dz, np.ascontiguousarray(kb, float),
-                       np.ascontiguousarray(self.Dms), Kms, C, _node_runs(lk, C.shape[2]), lw.astype(float),
-                       "specular" in comps, "flakes" in comps and self.has_flakes, do_ms, _CHUNK_PAIRS)
+        """The fused Numba kernel (:func:`~nmmm.appearance.brdf.fused_kernel.evaluate_effect`), writing ``out``."""
+        evaluate_effect(self, wi, wo, comps, out)
 
     def evaluate(self, wi, wo, comps):
         P, L = wi.shape[0], self.L
@@ -215,131 +192,3 @@ class _EffectTables(_Tables):
         """s(λ) = c_0 + 2 Σ c_m cos(m φ) (≥ −1): (P, L)."""
         return lobe_factor(self, wi, wo)
 
-
-def _pos(c, step, n_nodes):
-    x = min(np.arccos(min(max(c, 0.0), 1.0)) * (180.0 / np.pi) / step, n_nodes - 1.000001)
-    i = int(x)
-    return i, x - i
-
-
-def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, ext, eext, kd, Qd,
-                      Qz, Qb, s2_step, tau_e_const, z0, dz, kb, Dms, Kms, C, seg, lw, do_spec, do_flakes, do_ms, chunk):
-    """The terms of the module docstring per pair, one loop over wavelengths; the flake layer's
-    extinction τ_e S for opaque flakes (``tau_e_const``), else from ``ext`` (NT, L) = τ a(μ) (1 − T̄(μ, λ))
-    per internal direction (``_Tables.optical_path``) and ``eext`` = exp(−ext/μ) on the same nodes
-    (``_Tables._ext_exp``: the transmission in and out interpolated, no exp per wavelength)."""
-    P = wi.shape[0]
-    L = out.shape[1]
-    NT = Fs.shape[0]
-    NA = Dms.shape[0]
-    ND = den.shape[0]
-    M = C.shape[3] - 1 if do_ms else 0  # C[..., 0] is c_0, C[..., m] the mode m
-    K = C.shape[2]
-    NS2 = Qd.shape[0]
-    inv_n2 = 1.0 / (n * n)
-    n_chunks = (P + chunk - 1) // chunk
-    for ch in _prange(n_chunks):  # chunks of pairs: per-chunk buffers of the lobe sums
-        sk = np.empty(K + C.shape[3])
-        sl = np.zeros(L)
-        for p in range(ch * chunk, min(P, (ch + 1) * chunk)):
-            ix, iy, iz = wi[p, 0], wi[p, 1], wi[p, 2]
-            ox, oy, oz = wo[p, 0], wo[p, 1], wo[p, 2]
-            if iz <= 0.0 or oz <= 0.0:
-                for l in range(L):
-                    out[p, l] = 0.0
-                continue
-            i0, fi = _pos_nb(iz, step, NT)
-            o0, fo = _pos_nb(oz, step, NT)
-            ai0, fai = _pos_nb(iz, astep, NA)
-            ao0, fao = _pos_nb(oz, astep, NA)
-            spec_w = 0.0
-            d0 = 0
-            fd = 0.0
-            if do_spec and alpha > 0.0:
-                hx, hy, hz = ix + ox, iy + oy, iz + oz
-                hn = np.sqrt(hx * hx + hy * hy + hz * hz)
-                hx /= hn
-                hy /= hn
-                hz /= hn
-                a2 = alpha * alpha
-                dd = hz * hz * (a2 - 1.0) + 1.0
-                ti2 = (1.0 - iz * iz) / (iz * iz)
-                to2 = (1.0 - oz * oz) / (oz * oz)
-                G = 4.0 / ((1.0 + np.sqrt(1.0 + a2 * ti2)) * (1.0 + np.sqrt(1.0 + a2 * to2)))
-                spec_w = a2 / (np.pi * dd * dd) * G / (4.0 * iz * oz)
-                d0, fd = _pos_nb(ix * hx + iy * hy + iz * hz, step, NT)
-            ipx, ipy = ix / n, iy / n
-            ipz = np.sqrt(max(1.0 - ipx * ipx - ipy * ipy, 0.0))
-            opx, opy = ox / n, oy / n
-            opz = np.sqrt(max(1.0 - opx * opx - opy * opy, 0.0))
-            S2 = 1.0 / ipz + 1.0 / opz
-            S = 0.0
-            g = 0.0
-            c0 = 0
-            fc = 0.0
-            ki, fki, ko, fko = 0, 0.0, 0, 0.0
-            inv_i, inv_o = 0.0, 0.0
-            if tau > 0.0:
-                ki, fki = _pos_nb(ipz, step, NT)
-                a_i = a_tab[ki] * (1.0 - fki) + a_tab[ki + 1] * fki
-                ko, fko = _pos_nb(opz, step, NT)
-                a_o = a_tab[ko] * (1.0 - fko) + a_tab[ko + 1] * fko
-                S = a_i / ipz + a_o / opz
-                inv_i, inv_o = 1.0 / ipz, 1.0 / opz
-                if do_flakes:
-                    hx, hy, hz = ipx + opx, ipy + opy, ipz + opz
-                    hn = np.sqrt(hx * hx + hy * hy + hz * hz)
-                    hz /= hn
-                    t0, ft = _pos_nb(hz, dstep, ND)
-                    g = tau * (den[t0] * (1.0 - ft) + den[t0 + 1] * ft) / (4.0 * ipz * opz)
-                    c0, fc = _pos_nb((ipx * hx + ipy * hy) / hn + ipz * hz, step, NT)
-            cphi = 2.0  # > 1: no azimuth (a direction along the normal)
-            if M > 0:
-                ri = np.sqrt(ix * ix + iy * iy)
-                ro = np.sqrt(ox * ox + oy * oy)
-                if ri > 1e-9 and ro > 1e-9:
-                    cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-            has_z0 = z0 > 0.0
-            has_below = dz < 1.0
-            xs = min(max((S2 - 2.0) / s2_step, 0.0), NS2 - 1.000001)
-            js = int(xs)
-            fs = xs - js
-            e_t0 = np.exp(-tau_e[0] * S)
-            # the lobe's polar shape c_0 and azimuthal modes at the wavelength nodes (1 + s multiplies
-            # the separable lobe), linear in λ between: sl, each node's sum once per pair
-            if do_ms:
-                _lobe_at_wavelengths_nb(C, ai0, fai, ao0, fao, cphi, seg, lw, sk, sl)
-            o = out[p]
-            for l in range(L):  # few branches, all the same for every l
-                x = tau_e[l] * S + kd[l] * S2  # opaque flakes (as before issue 18: the same compiled code)
-                e = Qd[js, l] * (1.0 - fs) + Qd[js + 1, l] * fs
-                if tau_e_const:
-                    e *= e_t0
-                else:
-                    xf = ((ext[ki, l] * (1.0 - fki) + ext[ki + 1, l] * fki) * inv_i
-                          + (ext[ko, l] * (1.0 - fko) + ext[ko + 1, l] * fko) * inv_o)
-                    x = xf + kd[l] * S2
-                    e *= ((eext[ki, l] * (1.0 - fki) + eext[ki + 1, l] * fki)
-                          * (eext[ko, l] * (1.0 - fko) + eext[ko + 1, l] * fko))
-                fl = g * (1.0 - e) / (x + 1e-300) * (Rf[c0, l] * (1.0 - fc) + Rf[c0 + 1, l] * fc)
-                if has_z0:
-                    fl *= Qz[js, l] * (1.0 - fs) + Qz[js + 1, l] * fs
-                eb = e * kb[l]
-                if has_below:
-                    eb *= Qb[js, l] * (1.0 - fs) + Qb[js + 1, l] * fs
-                val = ((Tc[i0, l] * (1.0 - fi) + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * (1.0 - fo) + Tc[o0 + 1, l] * fo)
-                       * inv_n2 * (fl + eb))
-                val += spec_w * (Fs[d0, l] * (1.0 - fd) + Fs[d0 + 1, l] * fd)
-                val += ((Dms[ai0, l] * (1.0 - fai) + Dms[ai0 + 1, l] * fai)
-                        * (Dms[ao0, l] * (1.0 - fao) + Dms[ao0 + 1, l] * fao) * Kms[l] * (1.0 + sl[l]))
-                o[l] = val
-
-
-if _nb is not None:
-    _pos_nb = _nb.njit(inline="always", fastmath=True, cache=True)(_pos)
-    _prange = _nb.prange
-    _effect_kernel = _nb.njit(parallel=True, fastmath=True, cache=True)(_effect_kernel_py)
-else:  # pragma: no cover
-    _pos_nb = _pos
-    _prange = range
-    _effect_kernel = _effect_kernel_py
