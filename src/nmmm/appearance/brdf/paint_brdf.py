@@ -120,8 +120,8 @@ class PaintBRDF:
             wi[below] = (0.0, 0.0, 1.0)
             wo[below] = (0.0, 0.0, 1.0)
             below = below.reshape(-1)
-        wi = check_directions(wi, "wi")
-        wo = check_directions(wo, "wo")
+        wi = _checked_directions(wi, "wi")
+        wo = _checked_directions(wo, "wo")
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         wi = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
         wo = np.broadcast_to(wo, shape + (3,)).reshape(-1, 3)
@@ -200,6 +200,38 @@ class PaintBRDF:
         from dataclasses import replace
 
         return replace(self, _cache={}, **changes)
+
+
+def _unit_rows_py(a, out):
+    """out = a / |a| row by row (a (P, 3)); False unless every row is finite, of unit length within
+    1e-6 and has z >= 0 — the conditions and the numbers of ``check_directions`` in one pass."""
+    ok = True
+    for p in range(a.shape[0]):
+        x, y, z = a[p, 0], a[p, 1], a[p, 2]
+        nrm = np.sqrt(x * x + y * y + z * z)
+        if not abs(nrm - 1.0) <= 1e-6:  # also NaN and infinite entries
+            ok = False
+        out[p, 0] = x / nrm
+        out[p, 1] = y / nrm
+        out[p, 2] = z / nrm
+        if out[p, 2] < 0.0:
+            ok = False
+    return ok
+
+
+_unit_rows = _nb.njit(cache=True)(_unit_rows_py) if _nb is not None else None  # no fastmath: the same roundings
+
+
+def _checked_directions(v, name):
+    """``check_directions(v, name)`` (its result to the bit; 2 passes instead of 8 over 10^6 pairs);
+    any doubt — other dtype or layout, a row that fails — goes to check_directions, which raises."""
+    a = np.asarray(v)
+    if _unit_rows is None or a.dtype != np.float64 or a.ndim < 1 or a.shape[-1] != 3 or not a.flags.c_contiguous:
+        return check_directions(v, name)
+    out = np.empty(a.shape)
+    if not _unit_rows(a.reshape(-1, 3), out.reshape(-1, 3)):
+        return check_directions(v, name)
+    return out
 
 
 def _check_components(components):
