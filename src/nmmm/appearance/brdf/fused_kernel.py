@@ -182,37 +182,46 @@ def _attenuation_factors(c, s2_step, n_rows):
     return np.ascontiguousarray(hi), np.ascontiguousarray(lo)
 
 
-def _lobe_sums_py(C2, NA, a0, fa, b0, fb, cphi, K, M1, seg, lw, cc, cm, sk, sl):
+def _lobe_sums_py(C2, NA, a0, fa, b0, fb, cphi, K, M1, seg, lw, cm, sk, sl):
     """sl[l] = 1 + s(λ_l), s = c_0 + 2 Σ_m c_m cos(m φ) (≥ −1) linear in λ between the K node
-    sums (``ms_azimuth._lobe_at_wavelengths``, same numbers): ``C2`` the shape tables
-    (NA·NA, K·M1) bilinear in θi, θo as one 4-row blend ``cc`` (K·M1), cos(m φ) by the Chebyshev
-    recursion (``cm``; cphi > 1: no azimuth), the node sums ``sk``, then the wavelength runs
-    ``seg``. Arrays are indexed, not sliced: a view per pair cost more than the sums."""
+    sums (``ms_azimuth._lobe_at_wavelengths``, same numbers): ``C2`` the shape tables mode-major,
+    (NA·NA, M1·K) (:func:`_mode_major`), bilinear in θi, θo; cos(m φ) by the Chebyshev recursion
+    (``cm``; cphi > 1: no azimuth); each mode added to the node sums ``sk`` in a loop over the
+    nodes (it vectorises: a dot product per node did not); then the wavelength runs ``seg``.
+    Arrays are indexed, not sliced: a view per pair cost more than the sums."""
     w00 = (1.0 - fa) * (1.0 - fb)
     w01 = (1.0 - fa) * fb
     w10 = fa * (1.0 - fb)
     w11 = fa * fb
     r = a0 * NA + b0
-    for j in range(K * M1):
-        cc[j] = C2[r, j] * w00 + C2[r + 1, j] * w01 + C2[r + NA, j] * w10 + C2[r + NA + 1, j] * w11
+    for k in range(K):
+        sk[k] = C2[r, k] * w00 + C2[r + 1, k] * w01 + C2[r + NA, k] * w10 + C2[r + NA + 1, k] * w11
     if cphi <= 1.0:
         c_prev, c_cur = 1.0, cphi
         for m in range(1, M1):
             cm[m] = 2.0 * c_cur
             c_prev, c_cur = c_cur, 2.0 * cphi * c_cur - c_prev
-    else:
         for m in range(1, M1):
-            cm[m] = 0.0
+            c = cm[m]
+            j0 = m * K
+            for k in range(K):
+                j = j0 + k
+                sk[k] += c * (C2[r, j] * w00 + C2[r + 1, j] * w01 + C2[r + NA, j] * w10 + C2[r + NA + 1, j] * w11)
     for k in range(K):
-        s = cc[k * M1]
-        for m in range(1, M1):
-            s += cm[m] * cc[k * M1 + m]
-        sk[k] = max(s, -1.0)
+        sk[k] = max(sk[k], -1.0)
     for q in range(seg.shape[0] - 1):
         s_lo = sk[q]
         ds = (sk[q + 1] if q + 1 < K else s_lo) - s_lo
         for l in range(seg[q], seg[q + 1]):
             sl[l] = 1.0 + (s_lo + ds * lw[l])
+
+
+def _mode_major(C):
+    """The lobe's shape tables (NA, NA, K, 1 + M) as (NA·NA, (1 + M)·K), mode-major, for
+    :func:`_lobe_sums_py`; a (1, 1) zero table when there are none."""
+    if C.shape[-1] == 0:
+        return np.zeros((1, 1))
+    return np.ascontiguousarray(np.swapaxes(C, 2, 3)).reshape(C.shape[0] * C.shape[1], C.shape[2] * C.shape[3])
 
 
 if _nb is not None:
@@ -243,7 +252,6 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
     for ch in _prange(n_chunks):  # chunks of pairs: per-chunk buffers
         sk = np.empty(K)
         cm = np.empty(M1)
-        cc = np.empty(K * M1)
         sl = np.ones(L)
         eb = np.empty(L)
         xb = np.empty(L)
@@ -309,7 +317,7 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
                     ro = np.sqrt(ox * ox + oy * oy)
                     if ri > 1e-9 and ro > 1e-9:
                         cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-                _lobe_sums(C2, NA, ai0, fai, ao0, fao, cphi, K, M1, seg, lw, cc, cm, sk, sl)
+                _lobe_sums(C2, NA, ai0, fai, ao0, fao, cphi, K, M1, seg, lw, cm, sk, sl)
             # the pigments' attenuation at S': row js of the tables, as hi[js // 64] lo[js % 64] (_attenuation_factors)
             xs = min(max((S2 - 2.0) / s2_step, 0.0), ns2 - 1.000001)
             js = int(xs)
@@ -384,19 +392,21 @@ def evaluate_effect(tab, wi, wo, comps, out):
     C = tab._ms_modes_spectral
     do_ms = "multiple" in comps and bool(np.any(tab.Kms > 0)) and C.shape[-1] > 0
     K = C.shape[2]
-    C2 = np.ascontiguousarray(C.reshape(C.shape[0] * C.shape[1], K * C.shape[3])) if C.shape[-1] > 0 else np.zeros((1, 1))
+    c2 = getattr(tab, "_ms_mode_major", None)
+    if c2 is None or c2[0] is not C:  # once per shape tables
+        c2 = tab._ms_mode_major = (C, _mode_major(C))
     lk, lw = _node_weights(tab)
     kap = np.asarray(tab.kappa, float)
     Kms = np.asarray(tab.Kms, float) if "multiple" in comps else np.zeros(L)
     ns2 = tab._Qd.shape[0]
     q = getattr(tab, "_q_factors", None)
-    if q is None:  # once per tables: the factors of _Qd, _Qz, _Qb
-        q = tab._q_factors = tuple(t for f in (tab.dz, tab.z0, 1.0 - tab.dz)
-                                   for t in _attenuation_factors(kap * f, tab._s2_step, ns2))
+    if q is None or q[0] is not tab._Qd:  # once per tables: the factors of _Qd, _Qz, _Qb
+        q = tab._q_factors = (tab._Qd,) + tuple(t for f in (tab.dz, tab.z0, 1.0 - tab.dz)
+                                                for t in _attenuation_factors(kap * f, tab._s2_step, ns2))
     _effect_kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, tab.Fs, tab.Tc, Rf, a_tab, den,
                    tab.step, tab.astep, dstep, tab.n, tab.alpha, tab.tau if tab.has_flakes else 0.0,
-                   np.ascontiguousarray(tab.tau_e, float), tab.ext_tab, tab._ext_exp(), kap * tab.dz, *q,
+                   np.ascontiguousarray(tab.tau_e, float), tab.ext_tab, tab._ext_exp(), kap * tab.dz, *q[1:],
                    tab._s2_step, ns2, bool(tab.tau_e_const), tab.z0 > 0.0, tab.dz < 1.0,
-                   np.ascontiguousarray(kb, float), np.ascontiguousarray(tab.Dms), Kms, C2, K,
+                   np.ascontiguousarray(kb, float), np.ascontiguousarray(tab.Dms), Kms, c2[1], K,
                    _node_runs(lk, K), lw.astype(float), "specular" in comps, "flakes" in comps and tab.has_flakes,
                    do_ms, _CHUNK_PAIRS)
