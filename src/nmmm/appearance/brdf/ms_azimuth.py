@@ -107,16 +107,43 @@ def flake_kernels(tab, mu, sn, dmu, n_modes: int = 0, n_phi: int = 32, lossless:
     normal (96 × 96 nodes, the Fe2O3/mica pearl), undone by the renormalisation of the columns but
     not in the kernel's shape: the multiple term at θi = 0 was 1.5–3.3 % (8–13 SE) above the tracer's
     (issue 18). ``core_deg=None``: the point quadrature everywhere. ``wl``: only these wavelength
-    indices (the last axis of G), e.g. the lobe's nodes for the modes m ≥ 1."""
+    indices (the last axis of G), e.g. the lobe's nodes for the modes m ≥ 1.
+
+    The reflectance R(|u·h|) enters linearly, read from its angle table by linear interpolation, so
+    the kernel is a weight matrix over the table's angle nodes — geometry, tilt law and quadrature,
+    the same at every wavelength (:func:`_kernel_weights`) — times the table: G_m = A_m · R, one
+    matrix product for all wavelengths and both variants (issue 18: table build time; the same sums
+    as a per-wavelength evaluation, in another order)."""
     wl = slice(None) if wl is None else np.asarray(wl)
-    Rts = (tab.Rf[:, wl], tab.Rf0[:, wl])
-    L, n_mu = Rts[0].shape[1], mu.size
+    nv = 2 if lossless else 1
+    Rts = (tab.Rf[:, wl], tab.Rf0[:, wl])[:nv]
+    L, n_mu, NT = Rts[0].shape[1], mu.size, Rts[0].shape[0]
+    R = np.concatenate(Rts, axis=1)  # (NT, nv L)
+    G = np.empty((n_modes + 1, 2, nv, n_mu, n_mu, L))
+    for m, A in enumerate(_kernel_weights(tab, mu, sn, dmu, n_modes, n_phi, core_deg, NT)):
+        G[m] = (A @ R).reshape(2, n_mu, n_mu, nv, L).transpose(0, 3, 1, 2, 4)
+    return G
+
+
+def _lerp_entries(theta_deg, step, n):
+    """Node index i and weight f of the linear interpolation on a uniform angle table of n nodes
+    (as :func:`~nmmm.appearance.brdf.interpolation._lerp_table`): value = (1 − f) T[i] + f T[i + 1]."""
+    x = np.clip(theta_deg / step, 0.0, n - 1.000001)
+    i = x.astype(np.intp)
+    return i, x - i
+
+
+def _kernel_weights(tab, mu, sn, dmu, n_modes, n_phi, core_deg, NT):
+    """The flake kernel's weights over the reflectance table's angle nodes, mode by mode: yields
+    A_m (2 n_mu², NT), rows (up/down, j, k), with G_m = A_m · R_table (:func:`flake_kernels`)."""
     ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi  # [0, π), the kernel is even in φ
     uk = np.stack([sn, 0 * sn, -mu], -1)
-    nv = 2 if lossless else 1
-    G = np.zeros((n_modes + 1, 2, nv, n_mu, n_mu, L))
+    n_mu = mu.size
+    nn = n_mu * n_mu
     cm = np.cos(np.outer(np.arange(n_modes + 1), ph))  # (M+1, n_phi)
-    for iq, q in enumerate(ph):
+    rows = np.arange(nn)
+    idx, wgt = [], []
+    for q in ph:
         for s_out, sz in enumerate((1.0, -1.0)):
             uj = np.stack([sn * np.cos(q), sn * np.sin(q), sz * mu], -1)
             hv = uj[:, None, :] - uk[None, :, :]
@@ -127,14 +154,21 @@ def flake_kernels(tab, mu, sn, dmu, n_modes: int = 0, n_phi: int = 32, lossless:
             pdf = tab.tilt.pdf(hz)
             if core_deg is not None:
                 pdf = pdf * (1.0 - _core_weight(np.degrees(np.arccos(np.clip(hz, -1.0, 1.0))), core_deg))
-            wgt = pdf / (4 * mu[None, :]) * (dmu[:, None] * 2 * np.pi / n_phi)
-            dc = _deg(c.ravel())
-            for v, Rt in enumerate(Rts[:nv]):
-                contrib = wgt[..., None] * _lerp_table(Rt, dc, tab.step).reshape(wgt.shape + (L,))
-                G[:, s_out, v] += cm[:, iq, None, None, None] * contrib[None]
-    if core_deg is not None:
-        G += _core_kernel(tab, mu, sn, dmu, n_modes, nv, core_deg, Rts)
-    return G
+            w = (pdf / (4 * mu[None, :]) * (dmu[:, None] * 2 * np.pi / n_phi)).ravel()
+            i, f = _lerp_entries(_deg(c.ravel()), tab.step, NT)
+            r = (s_out * nn + rows) * NT + i
+            idx += [r, r + 1]
+            wgt += [w * (1.0 - f), w * f]
+    per_q = 4 * nn  # entries per azimuth (up/down, two nodes)
+    idx, wgt = np.concatenate(idx), np.concatenate(wgt)
+    core = _core_entries(tab, mu, dmu, core_deg, NT) if core_deg is not None else None
+    if core is not None:
+        idx = np.concatenate([idx, core[0]])
+    for m in range(n_modes + 1):
+        w = wgt * np.repeat(cm[m], per_q)
+        if core is not None:
+            w = np.concatenate([w, core[1] * np.cos(m * core[2])])
+        yield np.bincount(idx, w, minlength=2 * nn * NT).reshape(2 * nn, NT)
 
 
 def _core_weight(theta_deg, core_deg):
@@ -156,17 +190,17 @@ def _node_cells(mu, dmu, mu_c):
     return hi, hi - dmu
 
 
-def _core_kernel(tab, mu, sn, dmu, n_modes, nv, core_deg, Rts, n_theta: int = 16, n_phi: int = 48, n_sub: int = 4):
+def _core_entries(tab, mu, dmu, core_deg, NT, n_theta: int = 16, n_phi: int = 48, n_sub: int = 4):
     """The nearly flat flakes' part of :func:`flake_kernels`, χ(θ_h) p(h), as a transfer between the nodes'
     cells (:func:`_node_cells`): photons spread evenly over node k's cell (``n_sub`` incidences), each
     normal from a Gauss–Legendre rule in the tilt over [0, core_deg[1]] (the measure p(θ) sin θ dθ is
     finite where p per sr is not) and uniform in its azimuth, the mirror direction counted in the cell
     it falls in, its azimuth φ giving cos(m φ) exactly. Read along a row (the radiance of a node) or a
     column (where a node's photons go) it is the same cell average: the point kernel's 1/r peak at the
-    mirror direction is right in neither. ``Rts``: the flake reflectances (actual, lossless), (NT, L)."""
-    from scipy import sparse
-
-    L, n_mu = Rts[0].shape[1], mu.size
+    mirror direction is right in neither. Returns the entries of the weight matrix of
+    :func:`_kernel_weights` (flat index (up/down, j, k) · NT + table node, weight, φ), the mode m's
+    weight being weight · cos(m φ)."""
+    n_mu = mu.size
     n = getattr(tab, "n", 1.0)
     mu_c = np.sqrt(1.0 - 1.0 / (n * n)) if n > 1.0 else -1.0
     hi, lo = _node_cells(mu, dmu, mu_c)
@@ -179,25 +213,24 @@ def _core_kernel(tab, mu, sn, dmu, n_modes, nv, core_deg, Rts, n_theta: int = 16
     T, P = np.meshgrid(t, p, indexing="ij")
     h = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
     wh = np.broadcast_to((wt * 2 * np.pi / n_phi)[:, None], T.shape).reshape(-1)
-    G = np.zeros((n_modes + 1, 2, nv, n_mu, n_mu, L))
     kk = np.broadcast_to(np.arange(n_mu)[:, None], (n_mu, h.shape[0]))
+    idx, wgt, phi = [], [], []
     for i in range(n_sub):  # incidences spread evenly over each node's cell
         mu_in = hi - (i + 0.5) / n_sub * dmu
         uk = np.stack([np.sqrt(np.clip(1 - mu_in * mu_in, 0, 1)), 0 * mu_in, -mu_in], -1)  # travelling down
         c = uk @ h.T  # (k, S)
         out = uk[:, None, :] - 2.0 * c[..., None] * h[None]  # mirror directions
-        w = wh[None] * np.abs(c) / mu[:, None] / n_sub  # photons per unit τ per sample (the node's rate)
+        w = (wh[None] * np.abs(c) / mu[:, None] / n_sub).ravel()  # photons per unit τ per sample (the node's rate)
         mu_o = np.abs(out[..., 2])
-        phi_o = np.arctan2(out[..., 1], out[..., 0])
+        phi_o = np.arctan2(out[..., 1], out[..., 0]).ravel()
         j = np.clip(np.searchsorted(-edges, -mu_o, side="right") - 1, 0, n_mu - 1)  # the cell it falls in
-        row = (np.where(out[..., 2] > 0, 0, 1) * n_mu + j) * n_mu + kk  # (up/down, j, k)
-        D = sparse.csr_matrix((w.ravel(), (row.ravel(), np.arange(c.size))), shape=(2 * n_mu * n_mu, c.size))
-        dc = _deg(np.abs(c).ravel())
-        for v, Rt in enumerate(Rts[:nv]):
-            R = _lerp_table(Rt, dc, tab.step)  # (k S, L)
-            for m in range(n_modes + 1):
-                G[m, :, v] += (D @ (np.cos(m * phi_o).ravel()[:, None] * R)).reshape(2, n_mu, n_mu, L)
-    return G
+        row = ((np.where(out[..., 2] > 0, 0, 1) * n_mu + j) * n_mu + kk).ravel()  # (up/down, j, k)
+        it, f = _lerp_entries(_deg(np.abs(c).ravel()), tab.step, NT)
+        r = row * NT + it
+        idx += [r, r + 1]
+        wgt += [w * (1.0 - f), w * f]
+        phi += [phi_o, phi_o]
+    return np.concatenate(idx), np.concatenate(wgt), np.concatenate(phi)
 
 
 def double(R, T, n_doublings):
