@@ -94,3 +94,45 @@ def test_flake_kernel_weight_matrix_equals_the_per_wavelength_loop(k):
         assert np.max(np.abs(G[m] - ref[m])) <= 1e-13 * np.max(np.abs(ref[m])), m
     # all wavelengths = the selected ones, column for column
     assert np.array_equal(flake_kernels(tab, mu, sn, dmu, 0, n_phi=24)[..., wl], flake_kernels(tab, mu, sn, dmu, 0, n_phi=24, wl=wl))
+
+
+def test_flake_kernel_geometry_cache_gives_the_same_kernel():
+    tab = _paints()[2].prepare(W)
+    th, mu, sn, dmu = gauss_nodes(32, tab.n)
+    ms_azimuth._ENTRIES_CACHE.clear()
+    cold = flake_kernels(tab, mu, sn, dmu, 2, n_phi=24)
+    assert len(ms_azimuth._ENTRIES_CACHE) == 1
+    assert np.array_equal(flake_kernels(tab, mu, sn, dmu, 2, n_phi=24), cold)
+    other = metallic_paint(tilt=20.0).prepare(W)  # another tilt law: its own entries
+    assert not np.allclose(flake_kernels(other, mu, sn, dmu, 0, n_phi=24)[0], cold[0])
+    assert len(ms_azimuth._ENTRIES_CACHE) == 2
+
+
+def _reference_pigment_kernels(g, mu, sn, dmu, n_modes, n_phi=48):
+    """Henyey–Greenstein kernels as before issue 18's table-speed work: one azimuth at a time, every wavelength."""
+    L, n = g.size, mu.size
+    ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi
+    cm = np.cos(np.outer(np.arange(n_modes + 1), ph))
+    P = np.zeros((n_modes + 1, 2, n, n, L))
+    g2 = g * g
+    for iq, q in enumerate(ph):
+        for s_out, sz in enumerate((1.0, -1.0)):
+            cth = (sn[:, None] * sn[None, :] * np.cos(q) - sz * mu[:, None] * mu[None, :])[..., None]
+            p = (1 - g2) / (4 * np.pi * (1 + g2 - 2 * g * cth) ** 1.5)
+            wgt = (dmu[:, None] * 2 * np.pi / n_phi / mu[None, :])[..., None] * p
+            P[:, s_out] += cm[:, iq, None, None, None] * wgt[None]
+    col = P[0].sum(axis=(0, 1))
+    P *= np.where(col > 0, (1.0 / mu)[:, None] / np.where(col > 0, col, 1.0), 0.0)[None, None, None]
+    return P
+
+
+@pytest.mark.parametrize("g", [np.array([0.5, 0.5, 0.5]), np.array([0.1, -0.3, 0.1, 0.8]), np.array([0.6])])
+def test_pigment_kernels_equal_the_per_wavelength_loop(g):
+    from nmmm.appearance.brdf.coat_transport import pigment_kernels
+
+    th, mu, sn, dmu = gauss_nodes(24, 1.5)
+    ref = _reference_pigment_kernels(g, mu, sn, dmu, 3)
+    P = pigment_kernels(g, mu, sn, dmu, 3)
+    assert P.shape == ref.shape
+    for m in range(4):
+        assert np.max(np.abs(P[m] - ref[m])) <= 1e-13 * np.max(np.abs(ref[m])), m

@@ -43,23 +43,57 @@ _NODE_TOL = 0.005  # largest error of the lobe's directional factor, linear in �
 def pigment_kernels(g, mu, sn, dmu, n_modes, n_phi=48):
     """Henyey–Greenstein scattering per unit vertical optical depth of scatterers, Fourier
     modes 0 … n_modes: ``P[m, up/down, j, k, L]``, mode 0 renormalised so that each column
-    scatters exactly 1/μ_k (photon conservation on the nodes)."""
+    scatters exactly 1/μ_k (photon conservation on the nodes). Each distinct asymmetry g is
+    computed once (a constant g: one column for all wavelengths), the azimuth sums in one compiled
+    pass (:func:`_hg_modes`; issue 18: table build time)."""
     g = np.asarray(g, float)
-    L, n = g.size, mu.size
+    gu, inv = np.unique(g, return_inverse=True)
+    L, n = gu.size, mu.size
     ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi
-    cm = np.cos(np.outer(np.arange(n_modes + 1), ph))
+    cm = np.ascontiguousarray(np.cos(np.outer(np.arange(n_modes + 1), ph)))
+    # cosine of the scattering angle, travel down along k (sn_k, 0, −μ_k) → along j (sn_j cos q, sn_j sin q,
+    # sz μ_j), per azimuth q and up/down: (n_phi, 2, j, k)
+    cth = np.stack([np.stack([sn[:, None] * sn[None, :] * np.cos(q) - sz * mu[:, None] * mu[None, :]
+                              for sz in (1.0, -1.0)]) for q in ph])
+    wjk = dmu[:, None] * 2 * np.pi / n_phi / mu[None, :]
     P = np.zeros((n_modes + 1, 2, n, n, L))
-    g2 = g * g
-    for iq, q in enumerate(ph):
-        for s_out, sz in enumerate((1.0, -1.0)):
-            # travel down along k (sn_k, 0, −μ_k) → along j (sn_j cos q, sn_j sin q, sz μ_j)
-            cth = (sn[:, None] * sn[None, :] * np.cos(q) - sz * mu[:, None] * mu[None, :])[..., None]
-            p = (1 - g2) / (4 * np.pi * (1 + g2 - 2 * g * cth) ** 1.5)
-            wgt = (dmu[:, None] * 2 * np.pi / n_phi / mu[None, :])[..., None] * p
-            P[:, s_out] += cm[:, iq, None, None, None] * wgt[None]
+    _hg_modes(gu, np.ascontiguousarray(cth), np.ascontiguousarray(wjk), cm, P)
     col = P[0].sum(axis=(0, 1))  # (k, L)
     P *= np.where(col > 0, (1.0 / mu)[:, None] / np.where(col > 0, col, 1.0), 0.0)[None, None, None]
-    return P
+    return P[..., inv] if L < g.size or np.any(inv != np.arange(g.size)) else P
+
+
+def _hg_modes_py(g, cth, wjk, cm, P):
+    """P[m, s, j, k, l] = Σ_q cm[m, q] wjk[j, k] p_HG(cth[q, s, j, k]; g[l]), the azimuths summed in order
+    (as the loop over q it replaced); (1 + g² − 2 g c)^1.5 as x √x."""
+    n_phi, M1, L = cth.shape[0], cm.shape[0], g.size
+    g2 = g * g
+    a = 1 - g2
+    b = 1 + g2
+    g2x = 2 * g
+    v = np.empty(L)
+    for s in range(2):
+        for j in range(cth.shape[2]):
+            for k in range(cth.shape[3]):
+                w = wjk[j, k]
+                for q in range(n_phi):
+                    c = cth[q, s, j, k]
+                    for l in range(L):
+                        x = b[l] - g2x[l] * c
+                        v[l] = w * (a[l] / (4 * np.pi * (x * np.sqrt(x))))
+                    for m in range(M1):
+                        cq = cm[m, q]
+                        acc = P[m, s, j, k]
+                        for l in range(L):
+                            acc[l] += cq * v[l]
+
+
+try:  # pragma: no cover - numba is a dependency, the fallback only guards odd installs
+    import numba as _nb
+
+    _hg_modes = _nb.njit(cache=True)(_hg_modes_py)
+except ImportError:  # pragma: no cover
+    _hg_modes = _hg_modes_py
 
 
 def _slab(Ku, Kd, ext, thickness):

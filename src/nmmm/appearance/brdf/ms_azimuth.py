@@ -135,12 +135,50 @@ def _lerp_entries(theta_deg, step, n):
 
 def _kernel_weights(tab, mu, sn, dmu, n_modes, n_phi, core_deg, NT):
     """The flake kernel's weights over the reflectance table's angle nodes, mode by mode: yields
-    A_m (2 n_mu², NT), rows (up/down, j, k), with G_m = A_m · R_table (:func:`flake_kernels`)."""
+    A_m (2 n_mu², NT), rows (up/down, j, k), with G_m = A_m · R_table (:func:`flake_kernels`). The
+    entries depend on the nodes, the tilt law, the coat index and the quadrature, not on the wavelengths
+    or the flakes' optics: they are kept for the last few such geometries (:func:`_kernel_entries`)."""
+    n_mu = mu.size
+    S, ph, core_idx, core_w, core_phi = _kernel_entries(tab, mu, sn, dmu, n_phi, core_deg, NT)
+    for m in range(n_modes + 1):
+        # the point part: Σ_q cos(m q) (its azimuths' columns); the core: cos(m φ) of each mirror ray
+        A = S @ np.cos(m * ph)
+        if core_idx.size:
+            A += np.bincount(core_idx, core_w * np.cos(m * core_phi), minlength=A.size)
+        yield A.reshape(2 * n_mu * n_mu, NT)
+
+
+_ENTRIES_CACHE: dict = {}
+_ENTRIES_CACHE_SIZE = 2
+
+
+def _kernel_entries(tab, mu, sn, dmu, n_phi, core_deg, NT):
+    """The flake kernel's weight matrix (:func:`_kernel_weights`) before its azimuth sum: the point part as a
+    sparse matrix S (flat index (up/down, j, k) · NT + table node, azimuth q) and its azimuths q, the
+    core's entries (flat index, weight, azimuth φ of the mirror ray). Cached
+    (the last ``_ENTRIES_CACHE_SIZE``, ~45 MB each at 96 × 96 nodes) by what they depend on: the tilt
+    law (its nodes and density), the coat index, the polar nodes, the azimuths, the core's tilts and the
+    table step — a change of concentration, pigment or flake optics reuses them."""
+    tilt = tab.tilt
+    key = (np.asarray(tilt.tilt_deg, float).tobytes(), np.asarray(tilt.density, float).tobytes(),
+           float(getattr(tab, "n", 1.0)), mu.tobytes(), sn.tobytes(), dmu.tobytes(), int(n_phi),
+           None if core_deg is None else tuple(map(float, core_deg)), float(tab.step), int(NT))
+    hit = _ENTRIES_CACHE.pop(key, None)
+    if hit is None:
+        hit = _build_kernel_entries(tab, mu, sn, dmu, n_phi, core_deg, NT)
+        while len(_ENTRIES_CACHE) >= _ENTRIES_CACHE_SIZE:
+            _ENTRIES_CACHE.pop(next(iter(_ENTRIES_CACHE)))
+    _ENTRIES_CACHE[key] = hit  # most recently used last
+    return hit
+
+
+def _build_kernel_entries(tab, mu, sn, dmu, n_phi, core_deg, NT):
+    from scipy import sparse
+
     ph = (np.arange(n_phi) + 0.5) * np.pi / n_phi  # [0, π), the kernel is even in φ
     uk = np.stack([sn, 0 * sn, -mu], -1)
     n_mu = mu.size
     nn = n_mu * n_mu
-    cm = np.cos(np.outer(np.arange(n_modes + 1), ph))  # (M+1, n_phi)
     rows = np.arange(nn)
     idx, wgt = [], []
     for q in ph:
@@ -159,16 +197,11 @@ def _kernel_weights(tab, mu, sn, dmu, n_modes, n_phi, core_deg, NT):
             r = (s_out * nn + rows) * NT + i
             idx += [r, r + 1]
             wgt += [w * (1.0 - f), w * f]
-    per_q = 4 * nn  # entries per azimuth (up/down, two nodes)
-    idx, wgt = np.concatenate(idx), np.concatenate(wgt)
-    core = _core_entries(tab, mu, dmu, core_deg, NT) if core_deg is not None else None
-    if core is not None:
-        idx = np.concatenate([idx, core[0]])
-    for m in range(n_modes + 1):
-        w = wgt * np.repeat(cm[m], per_q)
-        if core is not None:
-            w = np.concatenate([w, core[1] * np.cos(m * core[2])])
-        yield np.bincount(idx, w, minlength=2 * nn * NT).reshape(2 * nn, NT)
+    q = np.repeat(np.arange(n_phi), 4 * nn)  # entries per azimuth: up/down, two table nodes
+    S = sparse.csr_matrix((np.concatenate(wgt), (np.concatenate(idx), q)), shape=(2 * nn * NT, n_phi))
+    if core_deg is None:
+        return S, ph, np.zeros(0, np.intp), np.zeros(0), np.zeros(0)
+    return (S, ph) + _core_entries(tab, mu, dmu, core_deg, NT)
 
 
 def _core_weight(theta_deg, core_deg):
@@ -259,7 +292,7 @@ def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int 
     n, L = tab.n, tab.L
     sel = np.unique(np.linspace(0, L - 1, min(L, max(n_probe, n_nodes))).round().astype(int))
     th, mu, sn, dmu = gauss_nodes(n_mu, n)
-    G = flake_kernels(tab, mu, sn, dmu, n_modes)[..., sel]  # (M+1, up/down, actual/lossless, j, k, K)
+    G = flake_kernels(tab, mu, sn, dmu, n_modes, wl=sel)  # (M+1, up/down, actual/lossless, j, k, K)
     eps = _lerp1(tab.a_tab, np.degrees(th), tab.step) / mu  # (k,) a(μ)/μ, opaque flakes' extinction per unit τ
     # × (1 − T̄(μ, λ)) per direction (extinction_ratio; 1 for opaque flakes): the extinction per unit τ
     target = eps[:, None] * tab.extinction_ratio(np.degrees(th))[:, sel]  # (k, K)
