@@ -136,3 +136,19 @@ def test_pigment_kernels_equal_the_per_wavelength_loop(g):
     assert P.shape == ref.shape
     for m in range(4):
         assert np.max(np.abs(P[m] - ref[m])) <= 1e-13 * np.max(np.abs(ref[m])), m
+
+
+def test_doubling_in_wavelength_chunks_is_the_one_batch_doubling():
+    import numba
+
+    rng = np.random.default_rng(3)
+    R = rng.random((20, 12, 12)) * 0.02
+    T = rng.random((20, 12, 12)) * 0.02 + 0.9 * np.eye(12)
+    one = ms_azimuth.double(R, T, 6)
+    n0 = numba.get_num_threads()
+    try:
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        split = ms_azimuth.in_chunks(lambda r, t: ms_azimuth.double(r, t, 6), R, T)
+    finally:
+        numba.set_num_threads(n0)
+    assert all(np.array_equal(a, b) for a, b in zip(one, split))

@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.appearance.brdf.interpolation import _NA, _deg, _lerp1, _lerp_table
-from nmmm.appearance.brdf.ms_azimuth import N_MODES, flake_kernels, gauss_nodes, lobe_tables
+from nmmm.appearance.brdf.ms_azimuth import N_MODES, double, flake_kernels, gauss_nodes, in_chunks, lobe_tables
 
 _N_MU = 96  # polar nodes (half in the escape cone)
 _N_PHI = 96  # azimuths of the flake kernel over [0, π)
@@ -98,16 +98,16 @@ except ImportError:  # pragma: no cover
 
 def _slab(Ku, Kd, ext, thickness):
     """(R, T) of a homogeneous slab, (L, j, k), from kernels per unit thickness (L, j, k) and
-    the extinction ext (L, k) per unit thickness, by doubling a thin seed slab."""
+    the extinction ext (L, k) per unit thickness, by doubling a thin seed slab. The number of
+    doublings is set by the largest extinction over all wavelengths; each wavelength's matrices are
+    then doubled on their own, in chunks of wavelengths run side by side
+    (:func:`~nmmm.appearance.brdf.ms_azimuth.in_chunks`: the same operations on each matrix, the same numbers)."""
     eye = np.eye(Ku.shape[-1])
     emax = float(np.max(ext)) * thickness
     nd = int(np.clip(np.ceil(np.log2(max(emax, 1e-12) / _MAX_STEP)), 4, 40))
     d = thickness / 2.0 ** nd
     R, T = d * Ku, d * Kd + eye[None] * (1.0 - d * ext)[:, None, :]
-    for _ in range(nd):
-        M = np.linalg.solve(eye[None] - R @ R, T)
-        R, T = R + T @ R @ M, T @ M
-    return R, T
+    return in_chunks(lambda r, t: double(r, t, nd), R, T)
 
 
 def _on_top(R, T, Rbelow):

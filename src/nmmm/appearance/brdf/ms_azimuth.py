@@ -266,6 +266,31 @@ def _core_entries(tab, mu, dmu, core_deg, NT, n_theta: int = 16, n_phi: int = 48
     return np.concatenate(idx), np.concatenate(wgt), np.concatenate(phi)
 
 
+def _workers(L):
+    """Threads for the wavelength chunks of :func:`in_chunks`: Numba's thread count
+    (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``; the kernels use the same), ≥ 8 wavelengths each."""
+    n = _nb.get_num_threads() if _nb is not None else 1
+    return max(1, min(n, L // 8))
+
+
+def in_chunks(fn, *arrays):
+    """fn over chunks of the leading (wavelength) axis of ``arrays`` in threads (NumPy's linear algebra
+    releases the GIL), its tuple of results concatenated: for per-wavelength work such as :func:`double`,
+    each wavelength's matrices see the same operations as in one call, so the numbers are the same at any
+    thread count (issue 18: table build time)."""
+    L = arrays[0].shape[0]
+    nw = _workers(L)
+    if nw == 1:
+        return fn(*arrays)
+    from concurrent.futures import ThreadPoolExecutor
+
+    cuts = np.linspace(0, L, nw + 1).round().astype(int)
+    parts = [tuple(a[i:j] for a in arrays) for i, j in zip(cuts[:-1], cuts[1:])]
+    with ThreadPoolExecutor(nw) as ex:
+        res = list(ex.map(lambda p: fn(*p), parts))
+    return tuple(np.concatenate(r) for r in zip(*res))
+
+
 def double(R, T, n_doublings):
     """Adding–doubling of a homogeneous (symmetric) layer: (R, T) of δ → of 2ⁿ δ; (L, j, k)."""
     eye = np.eye(R.shape[-1])
@@ -319,7 +344,8 @@ def azimuth_modes(tab, n_modes: int = N_MODES, n_mu: int = 48, n_doublings: int 
         Rb = rho[:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
         Ku = np.moveaxis(G[m, 0, v] * scale[None], -1, 0)  # (K, j, k) per unit τ
         Kd = np.moveaxis(G[m, 1, v] * scale[None], -1, 0)
-        R, T = double(delta * Ku, delta * Kd + eye[None] * (1 - delta * tT)[:, None, :], n_doublings)
+        R, T = in_chunks(lambda r, t: double(r, t, n_doublings), delta * Ku,
+                         delta * Kd + eye[None] * (1 - delta * tT)[:, None, :])
         Rtot = R + T @ np.linalg.solve(eye[None] - Rb @ R, Rb @ T) if m == 0 else R
         s = tT[:, :, None] + tT[:, None, :]  # ε_j + ε_k
         Mm = with_coat(Rtot) - Ku * -np.expm1(-tab.tau * s) / np.where(s > 0, s, 1.0)

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from nmmm.appearance.brdf.interpolation import _deg, _lerp1, _lerp_table
-from nmmm.appearance.brdf.ms_azimuth import flake_kernels, gauss_nodes
+from nmmm.appearance.brdf.ms_azimuth import double, flake_kernels, gauss_nodes, in_chunks
 
 
 def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 96, n_phi: int = 96, n_doublings: int = 16):
@@ -76,9 +76,8 @@ def multiple_scattering_factor(tab, sub, sub0, n_mu: int = 96, n_phi: int = 96, 
     for v, rho in ((0, tab.rho), (1, np.ones(L))):
         R = np.moveaxis(delta * G[0, v] * scale[None], -1, 0)  # (L, j, k)
         T = np.moveaxis(delta * G[1, v] * scale[None] + eye[..., None] * (1 - delta * target)[None], -1, 0)
-        for _ in range(n_doublings):  # symmetric layer: R2 = R + T R (1 − R R)⁻¹ T, T2 = T (1 − R R)⁻¹ T
-            M = np.linalg.solve(eye[None] - R @ R, T)
-            R, T = R + T @ R @ M, T @ M
+        # symmetric layer: R2 = R + T R (1 − R R)⁻¹ T, T2 = T (1 − R R)⁻¹ T, wavelengths in chunks side by side
+        R, T = in_chunks(lambda r, t: double(r, t, n_doublings), R, T)
         Rb = rho[:, None, None] * np.broadcast_to(lamb[:, None], (n_mu, n_mu))[None]
         Rtot = R + T @ np.linalg.solve(eye[None] - Rb @ R, Rb @ T)  # layer over the base
         u = np.linalg.solve(eye[None] - Rtot * (1 - Tint)[:, None, :],
