@@ -27,7 +27,7 @@ import numpy as np
 from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
 from nmmm.appearance.brdf.coat_transport import coat_transport
 from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
-from nmmm.appearance.brdf.interpolation import _NA, _deg, _hemi_mean, _lerp1, _lerp_table
+from nmmm.appearance.brdf.interpolation import _NA, _deg, _hemi_mean, _lerp1, _lerp_table, _refine_deficit
 from nmmm.appearance.brdf.fused_kernel import evaluate_effect
 from nmmm.appearance.brdf.ms_azimuth import lobe_factor
 from nmmm.appearance.brdf.tables import _Tables
@@ -116,6 +116,7 @@ class _EffectTables(_Tables):
         self.E1[-1] = Esi[-1]
         self.E10[-1] = Esi[-1]
         self.Dms = np.clip(1.0 - self.E10, 0.0, 1.0)
+        self.Dms_fine = _refine_deficit(self.Dms, Ti, self.astep, self.Tc, self.step)  # what the kernels read
         E0_bar = 2 * (w_e * mu_e) @ _lerp_table(self.E10, th_e, self.astep)
         self.E0_bar = E0_bar
         self.Fms = coat_transport(self)  # also the lobe's shape tables (c_0 and the modes)
@@ -184,7 +185,7 @@ class _EffectTables(_Tables):
             eb = eX * _s2_lerp(self._Qb, S2, self._s2_step) if self.dz < 1 else eX
             f += TT * eb * kb
         if "multiple" in comps and np.any(self.Kms > 0):
-            f += (_lerp_table(self.Dms, thi, self.astep) * _lerp_table(self.Dms, tho, self.astep) * self.Kms
+            f += (_lerp_table(self.Dms_fine, thi, self.step) * _lerp_table(self.Dms_fine, tho, self.step) * self.Kms
                   * (1 + self._azimuth_factor(wi, wo)))
         return f
 

@@ -59,7 +59,6 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
-    NA = Dms.shape[0]
     ND = den.shape[0]
     NR = Rf.shape[0]
     inv_n2 = 1.0 / (n * n)
@@ -73,13 +72,11 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
             for l in range(L):
                 out[p, l] = 0.0
             continue
-        # external angles -> positions on the 0.5° tables and the 2° albedo tables
+        # external angles -> positions on the 0.5° tables (the lobe's amount Dms included)
         thi = np.arccos(min(iz, 1.0)) * deg
         tho = np.arccos(min(oz, 1.0)) * deg
         i0, fi = _angle_pos_nb(thi / step, NT)
         o0, fo = _angle_pos_nb(tho / step, NT)
-        ai0, fai = _angle_pos_nb(thi / astep, NA)
-        ao0, fao = _angle_pos_nb(tho / astep, NA)
         # coat specular lobe (GGX)
         spec_w = 0.0
         d0 = 0
@@ -126,8 +123,6 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
                 c0, fc = _table_pos(cdl, step, NR)
         gi = 1.0 - fi
         go = 1.0 - fo
-        gai = 1.0 - fai
-        gao = 1.0 - fao
         gd = 1.0 - fd
         gc = 1.0 - fc
         if tau_e_const:
@@ -141,8 +136,8 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
                 tt = (Tc[i0, l] * gi + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * go + Tc[o0 + 1, l] * fo)
                 out[p, l] = (spec_w * (Fs[d0, l] * gd + Fs[d0 + 1, l] * fd)
                              + tt * (w_fl * (Rf[c0, l] * gc + Rf[c0 + 1, l] * fc) + w_b * kb[l])
-                             + w_ms * (Dms[ai0, l] * gai + Dms[ai0 + 1, l] * fai)
-                             * (Dms[ao0, l] * gao + Dms[ao0 + 1, l] * fao) * Kms[l])
+                             + w_ms * (Dms[i0, l] * gi + Dms[i0 + 1, l] * fi)
+                             * (Dms[o0, l] * go + Dms[o0 + 1, l] * fo) * Kms[l])
         else:
             inv_i = 1.0 / ipz if tau > 0.0 else 0.0
             inv_o = 1.0 / opz if tau > 0.0 else 0.0
@@ -155,8 +150,8 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
                 tt = (Tc[i0, l] * gi + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * go + Tc[o0 + 1, l] * fo) * inv_n2
                 out[p, l] = (spec_w * (Fs[d0, l] * gd + Fs[d0 + 1, l] * fd)
                              + tt * (g * ph * (Rf[c0, l] * gc + Rf[c0 + 1, l] * fc) + e * w_base * kb[l])
-                             + w_ms * (Dms[ai0, l] * gai + Dms[ai0 + 1, l] * fai)
-                             * (Dms[ao0, l] * gao + Dms[ao0 + 1, l] * fao) * Kms[l])
+                             + w_ms * (Dms[i0, l] * gi + Dms[i0 + 1, l] * fi)
+                             * (Dms[o0, l] * go + Dms[o0 + 1, l] * fo) * Kms[l])
 
 
 if _nb is not None:
@@ -243,7 +238,7 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
     P = wi.shape[0]
     L = out.shape[1]
     NT = Fs.shape[0]
-    NA = Dms.shape[0]
+    NA = int(90.0 / astep + 0.5) + 1  # nodes of the lobe's shape tables (C2: NA·NA rows); Dms is on the 0.5° ones
     ND = den.shape[0]
     M1 = C2.shape[1] // K
     inv_n2 = 1.0 / (n * n)
@@ -359,13 +354,11 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
             gi = 1.0 - fi
             go = 1.0 - fo
             gd = 1.0 - fd
-            gai = 1.0 - fai
-            gao = 1.0 - fao
             for l in range(L):
                 out[p, l] = ((Tc[i0, l] * gi + Tc[i0 + 1, l] * fi) * (Tc[o0, l] * go + Tc[o0 + 1, l] * fo) * inv_n2
                              * acc[l]
                              + spec_w * (Fs[d0, l] * gd + Fs[d0 + 1, l] * fd)
-                             + (Dms[ai0, l] * gai + Dms[ai0 + 1, l] * fai) * (Dms[ao0, l] * gao + Dms[ao0 + 1, l] * fao)
+                             + (Dms[i0, l] * gi + Dms[i0 + 1, l] * fi) * (Dms[o0, l] * go + Dms[o0 + 1, l] * fo)
                              * Kms[l] * sl[l])
 
 
@@ -407,6 +400,6 @@ def evaluate_effect(tab, wi, wo, comps, out):
                    tab.step, tab.astep, dstep, tab.n, tab.alpha, tab.tau if tab.has_flakes else 0.0,
                    np.ascontiguousarray(tab.tau_e, float), tab.ext_tab, tab._ext_exp(), kap * tab.dz, *q[1:],
                    tab._s2_step, ns2, bool(tab.tau_e_const), tab.z0 > 0.0, tab.dz < 1.0,
-                   np.ascontiguousarray(kb, float), np.ascontiguousarray(tab.Dms), Kms, c2[1], K,
+                   np.ascontiguousarray(kb, float), np.ascontiguousarray(tab.Dms_fine), Kms, c2[1], K,
                    _node_runs(lk, K), lw.astype(float), "specular" in comps, "flakes" in comps and tab.has_flakes,
                    do_ms, _CHUNK_PAIRS)

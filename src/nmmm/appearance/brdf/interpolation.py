@@ -5,6 +5,8 @@ are sampled on uniform angle grids and read back by linear interpolation; these 
 are shared by the table builder, the NumPy path and the discrete-flake code.
 
 - ``_NT``, ``_NA`` — nodes of the 1-D angle tables (0.5°) and of the albedo tables (2°).
+- ``_refine_deficit`` — the multiple lobe's amount 1 − E⁰(θ) from the 2° albedo nodes onto the
+  0.5° nodes of the 1-D tables, as T(θ) G(θ) with G = (1 − E⁰)/T interpolated (see there).
 - ``_lerp_table`` — (NT, L) table at angles (P,) → (P, L) (Numba loop for large inputs).
 - ``_lerp1`` — the same for a 1-D table; ``_deg`` — arccos in degrees.
 - ``_phi_mean`` — (1 − e⁻ˣ)/x, the mean attenuation through a slab.
@@ -81,3 +83,24 @@ if _nb is not None:
     _lerp_nb = _nb.njit(cache=True)(_lerp_table_loop)
 else:  # pragma: no cover
     _lerp_nb = None
+
+
+def _refine_deficit(D, T, astep, Tc, step):
+    """The lobe's amount D = 1 − E⁰ (NA, L) on the albedo nodes (``astep``) -> on the nodes of the
+    coat's transmission table ``Tc`` (NT, L; ``step``), the grid the kernels read T(θ) on.
+
+    E⁰ = R(θ) + T(θ) g(θ'), with g the single terms under the coat, so D = T(θ) G(θ), G = 1 − g
+    for a clear coat (T = 1 − R): the Fresnel curvature of T near grazing is in T, and G is smooth.
+    Interpolating D itself linearly on 2° nodes missed that curvature: a lossless effect coat's
+    white furnace was 3–5e-3 off between nodes at 85–89° (tests/appearance/test_brdf_furnace_grazing.py).
+    So G = D / T is interpolated and multiplied by T on the fine nodes; at 90° (T ≈ 0, where the
+    tables set E⁰ = R) G is extrapolated from the two nodes before. On the albedo nodes (a subset of the fine ones) the
+    result is D itself."""
+    D = np.asarray(D, float)
+    T = np.asarray(T, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        G = np.where(T > 1e-12, D / np.where(T > 1e-12, T, 1.0), 0.0)
+    if G.shape[0] >= 3:  # at 90° T ≈ 0 and the tables set E⁰ = R there (G = 1): its limit instead
+        G[-1] = 2.0 * G[-2] - G[-3]
+    th = np.arange(Tc.shape[0]) * step
+    return np.clip(Tc * _lerp_table(G, th, astep), 0.0, 1.0)

@@ -414,7 +414,7 @@ def lobe_tables(tab, F, sel, ms, ms_lossless, th, mu, dmu):
         return 0.5 * (A + np.swapaxes(A, 0, 1))
 
     # (1 − E⁰)-weighted means over θo as the kernel integrates: the 128-node Gauss rule of the
-    # albedo tables on the linear interpolants of the 2° tables
+    # albedo tables, the shape on the linear interpolants of the 2° tables, 1 − E⁰ on the 0.5° ones
     xg, wg = np.polynomial.legendre.leggauss(128)
     mu_e = 0.5 * (xg + 1)
     te = _deg(mu_e) / tab.astep
@@ -422,7 +422,7 @@ def lobe_tables(tab, F, sel, ms, ms_lossless, th, mu, dmu):
     Wg = np.zeros((mu_e.size, _NA))
     Wg[np.arange(mu_e.size), j0] = 1 - (te - j0)
     Wg[np.arange(mu_e.size), j0 + 1] += te - j0
-    Dg = Wg @ tab.Dms[:, sel]  # (G, K)
+    Dg = _lerp_table(tab.Dms_fine, _deg(mu_e), tab.step)[:, sel]  # (G, K)
     wgt = (wg * mu_e)[:, None] * Dg
     wgt = wgt / np.where(wgt.sum(axis=0) > 0, wgt.sum(axis=0), 1.0)
 
@@ -509,9 +509,13 @@ def _lobe_at_wavelengths(C, ai0, fai, ao0, fao, cphi, seg, lw, sk, sl):
 
 
 def _add_modes_py(wi, wo, out, Dms, Kms, C, seg, lw, astep, chunk):
+    """out += f_KC s per pair: the shape C on the albedo nodes (``astep``), the lobe's amount Dms on
+    the 0.5° nodes of the 1-D tables (``interpolation._refine_deficit``)."""
     P = wi.shape[0]
     L = out.shape[1]
-    NA = Dms.shape[0]
+    NA = C.shape[0]
+    NT = Dms.shape[0]
+    dstep = 90.0 / (NT - 1)
     K = C.shape[2]
     n_chunks = (P + chunk - 1) // chunk
     for c in _prange(n_chunks):  # chunks of pairs: per-chunk buffers for the node and wavelength sums
@@ -534,15 +538,21 @@ def _add_modes_py(wi, wo, out, Dms, Kms, C, seg, lw, astep, chunk):
             b0 = int(xo)
             fb = xo - b0
             _lobe_at_wavelengths_nb(C, a0, fa, b0, fb, cphi, seg, lw, sk, sl)
-            ga = 1.0 - fa
-            gb = 1.0 - fb
-            da0 = Dms[a0]
-            da1 = Dms[a0 + 1]
-            db0 = Dms[b0]
-            db1 = Dms[b0 + 1]
+            ui = min(np.arccos(min(iz, 1.0)) * (180.0 / np.pi) / dstep, NT - 1.000001)
+            d0 = int(ui)
+            fd = ui - d0
+            uo = min(np.arccos(min(oz, 1.0)) * (180.0 / np.pi) / dstep, NT - 1.000001)
+            e0 = int(uo)
+            fe = uo - e0
+            gd = 1.0 - fd
+            ge = 1.0 - fe
+            da0 = Dms[d0]
+            da1 = Dms[d0 + 1]
+            db0 = Dms[e0]
+            db1 = Dms[e0 + 1]
             o = out[p]
             for l in range(L):  # branch-free: vectorises
-                o[l] += sl[l] * ((da0[l] * ga + da1[l] * fa) * (db0[l] * gb + db1[l] * fb) * Kms[l])
+                o[l] += sl[l] * ((da0[l] * gd + da1[l] * fd) * (db0[l] * ge + db1[l] * fe) * Kms[l])
 
 
 if _nb is not None:
@@ -605,5 +615,5 @@ def add_azimuth_modes(tab, wi, wo, out):
     if C.shape[-1] == 0:
         return
     lk, lw = _node_weights(tab)
-    _add_modes(np.ascontiguousarray(wi, float), np.ascontiguousarray(wo, float), out, np.ascontiguousarray(tab.Dms),
+    _add_modes(np.ascontiguousarray(wi, float), np.ascontiguousarray(wo, float), out, np.ascontiguousarray(tab.Dms_fine),
                np.ascontiguousarray(tab.Kms, float), C, _node_runs(lk, C.shape[2]), lw, float(tab.astep), _CHUNK_PAIRS)

@@ -11,7 +11,7 @@ import numpy as np
 from nmmm.appearance.brdf.clear_coat import ggx_distribution, smith_g1_ggx
 from nmmm.appearance.brdf.flake_lobe import flake_single_scattering_albedo
 from nmmm.appearance.brdf.fused_kernel import _kernel
-from nmmm.appearance.brdf.interpolation import _NA, _NT, _deg, _hemi_mean, _lerp1, _lerp_table, _phi_mean
+from nmmm.appearance.brdf.interpolation import _NA, _NT, _deg, _hemi_mean, _lerp1, _lerp_table, _phi_mean, _refine_deficit
 from nmmm.appearance.brdf.ms_azimuth import azimuth_modes
 from nmmm.appearance.brdf.multiple_scattering import multiple_scattering_factor
 from nmmm.appearance.brdf.spectral_inputs import _spectral_values
@@ -200,6 +200,7 @@ class _Tables:
         self.E10[-1] = Esi[-1]
         # multiple-scattering compensation (Kulla & Conty 2017)
         self.Dms = np.clip(1.0 - self.E10, 0.0, 1.0)
+        self.Dms_fine = _refine_deficit(self.Dms, Ti, self.astep, self.Tc, self.step)  # what the kernels read
         E0_bar = 2 * (w_e * mu_e) @ _lerp_table(self.E10, th_e, self.astep)
         sub = 2 * (w_e * mu_e) @ (_lerp_table(self.E1 - self._es_at(tha), th_e, self.astep))
         sub0 = 2 * (w_e * mu_e) @ (_lerp_table(self.E10 - self._es_at(tha), th_e, self.astep))
@@ -239,7 +240,7 @@ class _Tables:
             kb = np.zeros(self.L)
         _kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
                 self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
-                np.ascontiguousarray(self.tau_e, float), self.ext_tab, self._ext_exp(), kb, self.Dms,
+                np.ascontiguousarray(self.tau_e, float), self.ext_tab, self._ext_exp(), kb, self.Dms_fine,
                 np.asarray(self.Kms, float),
                 "specular" in comps, "flakes" in comps and self.has_flakes, do_base, do_ms,
                 bool(self.tau_e_const))
@@ -307,5 +308,5 @@ class _Tables:
                     sub += kb
             f += TT * sub
         if "multiple" in comps and np.any(self.Kms > 0):
-            f += _lerp_table(self.Dms, thi, self.astep) * _lerp_table(self.Dms, tho, self.astep) * self.Kms
+            f += _lerp_table(self.Dms_fine, thi, self.step) * _lerp_table(self.Dms_fine, tho, self.step) * self.Kms
         return f
