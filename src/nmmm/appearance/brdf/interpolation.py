@@ -85,7 +85,7 @@ else:  # pragma: no cover
     _lerp_nb = None
 
 
-def _refine_deficit(D, T, astep, Tc, step):
+def _refine_deficit(D, T, astep, Tc, step, R=None, Rc=None):
     """The lobe's amount D = 1 − E⁰ (NA, L) on the albedo nodes (``astep``) -> on the nodes of the
     coat's transmission table ``Tc`` (NT, L; ``step``), the grid the kernels read T(θ) on.
 
@@ -95,12 +95,17 @@ def _refine_deficit(D, T, astep, Tc, step):
     white furnace was 3–5e-3 off between nodes at 85–89° (tests/appearance/test_brdf_furnace_grazing.py).
     So G = D / T is interpolated and multiplied by T on the fine nodes; at 90° (T ≈ 0, where the
     tables set E⁰ = R) G is extrapolated from the two nodes before. On the albedo nodes (a subset of the fine ones) the
-    result is D itself."""
-    D = np.asarray(D, float)
+    result is D itself.
+
+    The single terms' albedo E = R + T g is refined the same way with the coat's reflectance
+    ``R`` (NA, L) on the albedo nodes and ``Rc`` (NT, L) on the fine ones: E = Rc + Tc G."""
+    D = np.asarray(D, float) - (0.0 if R is None else np.asarray(R, float))
     T = np.asarray(T, float)
     with np.errstate(divide="ignore", invalid="ignore"):
         G = np.where(T > 1e-12, D / np.where(T > 1e-12, T, 1.0), 0.0)
     if G.shape[0] >= 3:  # at 90° T ≈ 0 and the tables set E⁰ = R there (G = 1): its limit instead
         G[-1] = 2.0 * G[-2] - G[-3]
     th = np.arange(Tc.shape[0]) * step
+    if R is not None:
+        return Rc + Tc * _lerp_table(G, th, astep)
     return np.clip(Tc * _lerp_table(G, th, astep), 0.0, 1.0)

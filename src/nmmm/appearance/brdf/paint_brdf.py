@@ -158,8 +158,7 @@ class PaintBRDF:
         wi = check_directions(wi, "wi")
         shape = wi.shape[:-1]
         th = _deg(wi.reshape(-1, 3)[:, 2])
-        a = _lerp_table(tab.E1, th, tab.astep) + (_lerp_table(tab.Dms_fine, th, tab.step) * _lerp_table(tab.ms_albedo_factor, th, tab.astep)
-                                                  * tab.Fms)
+        a = _lerp_table(tab.albedo_nodes()[0], th, tab.step)
         return a.reshape(shape + (tab.L,))
 
     def lossless_albedo(self, wavelength_nm, wi) -> np.ndarray:
@@ -168,7 +167,7 @@ class PaintBRDF:
         tab = self.prepare(wavelength_nm)
         wi = check_directions(wi, "wi")
         th = _deg(wi.reshape(-1, 3)[:, 2])
-        a = _lerp_table(tab.E10, th, tab.astep) + _lerp_table(tab.Dms_fine, th, tab.step)
+        a = _lerp_table(tab.albedo_nodes()[1], th, tab.step)
         return a.reshape(wi.shape[:-1] + (tab.L,))
 
     def bin_average(self, wavelength_nm, wi, theta_edges_deg, phi_edges_deg, components=COMPONENTS,

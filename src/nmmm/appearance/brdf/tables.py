@@ -226,6 +226,22 @@ class _Tables:
     def _es_at(self, tha):
         return _lerp_table(self.Es, tha, self.step)
 
+    def albedo_nodes(self):
+        """Directional albedo (all terms) and its lossless counterpart on the 0.5° nodes -> two (NT, L)
+        arrays, cached: the single terms E = R + T g and the multiple lobe's amount refined through the
+        coat as the kernels read it (:func:`~nmmm.appearance.brdf.interpolation._refine_deficit`), the
+        lobe's directional factor interpolated from the albedo nodes. Linear between the nodes."""
+        cached = getattr(self, "_albedo_nodes", None)
+        if cached is None:
+            tha = np.linspace(0.0, 90.0, self.E1.shape[0])
+            Ti, Ri = _lerp_table(self.Tc, tha, self.step), _lerp_table(self.Es, tha, self.step)
+            e1 = _refine_deficit(self.E1, Ti, self.astep, self.Tc, self.step, Ri, self.Es)
+            e10 = _refine_deficit(self.E10, Ti, self.astep, self.Tc, self.step, Ri, self.Es)
+            th = np.arange(self.Tc.shape[0]) * self.step
+            fac = _lerp_table(self.ms_albedo_factor, th, self.astep)
+            cached = self._albedo_nodes = (e1 + self.Dms_fine * fac * self.Fms, e10 + self.Dms_fine)
+        return cached
+
     def evaluate_fast(self, wi, wo, comps, out):
         """The fused Numba kernel (same equations as :meth:`evaluate`), writing ``out``."""
         Rf = self.Rf if self.has_flakes else np.zeros((2, self.L))  # read with weight 0

@@ -91,12 +91,12 @@ def add_environment(out, brdf, w, wo, env, first: bool):
 
     env = np.ascontiguousarray(env, dtype=float)
     tab = brdf.prepare(w) if isinstance(brdf, PaintBRDF) and type(brdf).albedo is PaintBRDF.albedo else None
-    step = getattr(tab, "astep", None)
+    step = getattr(tab, "step", None)
     if _nb is None or step is None:
         v = brdf.albedo(w, wo) * env[None, :]
         out[...] = v if first else out + v
         return
-    n = tab.E1.shape[0]
+    n = tab.Tc.shape[0]  # the albedo is linear between the nodes of its 0.5° table (albedo_nodes)
     th_nodes = np.radians(np.arange(n) * step)
     nodes = np.stack([np.sin(th_nodes), np.zeros(n), np.cos(th_nodes)], axis=-1)
     nodes[-1] = (1.0, 0.0, 0.0)
