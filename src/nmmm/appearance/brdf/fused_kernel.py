@@ -35,6 +35,29 @@ else:  # pragma: no cover
     _table_pos = _table_pos_py
 
 
+def _ggx_weight_py(ix, iy, iz, ox, oy, oz, alpha, step, n_nodes):
+    """The rough coat's specular lobe per pair: D G / (4 cos θi cos θo) (GGX, Smith's separable G)
+    and the position of the microfacet angle θ_d on the ``step``° Fresnel table -> (w, d0, fd)."""
+    hx, hy, hz = ix + ox, iy + oy, iz + oz
+    hn = np.sqrt(hx * hx + hy * hy + hz * hz)
+    hx /= hn
+    hy /= hn
+    hz /= hn
+    a2 = alpha * alpha
+    dd = hz * hz * (a2 - 1.0) + 1.0
+    ti2 = (1.0 - iz * iz) / (iz * iz)
+    to2 = (1.0 - oz * oz) / (oz * oz)
+    G = 4.0 / ((1.0 + np.sqrt(1.0 + a2 * ti2)) * (1.0 + np.sqrt(1.0 + a2 * to2)))
+    d0, fd = _table_pos(ix * hx + iy * hy + iz * hz, step, n_nodes)
+    return a2 / (np.pi * dd * dd) * G / (4.0 * iz * oz), d0, fd
+
+
+if _nb is not None:
+    _ggx_weight = _nb.njit(inline="always", fastmath=True, cache=True)(_ggx_weight_py)
+else:  # pragma: no cover
+    _ggx_weight = _ggx_weight_py
+
+
 def _angle_pos(x, n_nodes):
     """Node index and fraction of position ``x`` (angle / step) on ``n_nodes`` nodes (last interval closed)."""
     x = min(max(x, 0.0), n_nodes - 1.000001)
@@ -48,7 +71,7 @@ else:  # pragma: no cover
     _angle_pos_nb = _angle_pos
 
 
-def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha, tau, tau_e, ext, eext, kb, Dms,
+def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, dstep, n, alpha, tau, tau_e, ext, eext, kb, Dms,
                Kms, do_spec, do_flakes, do_base, do_ms, tau_e_const):
     """Per pair the geometry (table positions and per-pair weights) first, then one branch-free
     loop over wavelengths (the terms a paint lacks enter with weight 0, ``Rf`` then a (2, L)
@@ -82,20 +105,7 @@ def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n, alpha
         d0 = 0
         fd = 0.0
         if do_spec and alpha > 0.0:
-            hx, hy, hz = ix + ox, iy + oy, iz + oz
-            hn = np.sqrt(hx * hx + hy * hy + hz * hz)
-            hx /= hn
-            hy /= hn
-            hz /= hn
-            cd = ix * hx + iy * hy + iz * hz
-            a2 = alpha * alpha
-            dd = hz * hz * (a2 - 1.0) + 1.0
-            D = a2 / (np.pi * dd * dd)
-            ti2 = (1.0 - iz * iz) / (iz * iz)
-            to2 = (1.0 - oz * oz) / (oz * oz)
-            G = 4.0 / ((1.0 + np.sqrt(1.0 + a2 * ti2)) * (1.0 + np.sqrt(1.0 + a2 * to2)))
-            spec_w = D * G / (4.0 * iz * oz)
-            d0, fd = _table_pos(cd, step, NT)
+            spec_w, d0, fd = _ggx_weight(ix, iy, iz, ox, oy, oz, alpha, step, NT)
         # internal directions (Snell)
         ipx, ipy = ix / n, iy / n
         ipz = np.sqrt(max(1.0 - ipx * ipx - ipy * ipy, 0.0))
@@ -268,18 +278,7 @@ def _effect_kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, astep, dstep, n
             d0 = 0
             fd = 0.0
             if do_spec and alpha > 0.0:
-                hx, hy, hz = ix + ox, iy + oy, iz + oz
-                hn = np.sqrt(hx * hx + hy * hy + hz * hz)
-                hx /= hn
-                hy /= hn
-                hz /= hn
-                a2 = alpha * alpha
-                dd = hz * hz * (a2 - 1.0) + 1.0
-                ti2 = (1.0 - iz * iz) / (iz * iz)
-                to2 = (1.0 - oz * oz) / (oz * oz)
-                G = 4.0 / ((1.0 + np.sqrt(1.0 + a2 * ti2)) * (1.0 + np.sqrt(1.0 + a2 * to2)))
-                spec_w = a2 / (np.pi * dd * dd) * G / (4.0 * iz * oz)
-                d0, fd = _table_pos(ix * hx + iy * hy + iz * hz, step, NT)
+                spec_w, d0, fd = _ggx_weight(ix, iy, iz, ox, oy, oz, alpha, step, NT)
             ipx, ipy = ix / n, iy / n
             ipz = np.sqrt(max(1.0 - ipx * ipx - ipy * ipy, 0.0))
             opx, opy = ox / n, oy / n

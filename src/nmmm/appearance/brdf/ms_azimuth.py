@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from nmmm.appearance.brdf.fused_kernel import _angle_pos_nb
 from nmmm.appearance.brdf.interpolation import _NA, _deg, _lerp1, _lerp_table
 
 try:  # pragma: no cover - numba is a dependency, the fallback only guards odd installs
@@ -515,7 +516,7 @@ def _add_modes_py(wi, wo, out, Dms, Kms, C, seg, lw, astep, chunk):
     L = out.shape[1]
     NA = C.shape[0]
     NT = Dms.shape[0]
-    dstep = 90.0 / (NT - 1)
+    fstep = 90.0 / (NT - 1)
     K = C.shape[2]
     n_chunks = (P + chunk - 1) // chunk
     for c in _prange(n_chunks):  # chunks of pairs: per-chunk buffers for the node and wavelength sums
@@ -531,19 +532,13 @@ def _add_modes_py(wi, wo, out, Dms, Kms, C, seg, lw, astep, chunk):
             cphi = 2.0
             if ri > 1e-9 and ro > 1e-9:
                 cphi = min(max(-(ix * ox + iy * oy) / (ri * ro), -1.0), 1.0)
-            xi = min(np.arccos(min(iz, 1.0)) * (180.0 / np.pi) / astep, NA - 1.000001)
-            a0 = int(xi)
-            fa = xi - a0
-            xo = min(np.arccos(min(oz, 1.0)) * (180.0 / np.pi) / astep, NA - 1.000001)
-            b0 = int(xo)
-            fb = xo - b0
+            thi = np.arccos(min(iz, 1.0)) * (180.0 / np.pi)
+            tho = np.arccos(min(oz, 1.0)) * (180.0 / np.pi)
+            a0, fa = _angle_pos_nb(thi / astep, NA)  # the shape's 2° nodes
+            b0, fb = _angle_pos_nb(tho / astep, NA)
             _lobe_at_wavelengths_nb(C, a0, fa, b0, fb, cphi, seg, lw, sk, sl)
-            ui = min(np.arccos(min(iz, 1.0)) * (180.0 / np.pi) / dstep, NT - 1.000001)
-            d0 = int(ui)
-            fd = ui - d0
-            uo = min(np.arccos(min(oz, 1.0)) * (180.0 / np.pi) / dstep, NT - 1.000001)
-            e0 = int(uo)
-            fe = uo - e0
+            d0, fd = _angle_pos_nb(thi / fstep, NT)  # the amount's 0.5° nodes
+            e0, fe = _angle_pos_nb(tho / fstep, NT)
             gd = 1.0 - fd
             ge = 1.0 - fe
             da0 = Dms[d0]

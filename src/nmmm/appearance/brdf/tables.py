@@ -255,7 +255,7 @@ class _Tables:
         if not do_base:  # the kernel's wavelength loop reads every table with a 0/1 weight
             kb = np.zeros(self.L)
         _kernel(np.ascontiguousarray(wi), np.ascontiguousarray(wo), out, self.Fs, self.Tc, Rf, a_tab, den,
-                self.step, self.astep, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
+                self.step, dstep, self.n, self.alpha, self.tau if self.has_flakes else 0.0,
                 np.ascontiguousarray(self.tau_e, float), self.ext_tab, self._ext_exp(), kb, self.Dms_fine,
                 np.asarray(self.Kms, float),
                 "specular" in comps, "flakes" in comps and self.has_flakes, do_base, do_ms,
