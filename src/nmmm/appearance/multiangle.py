@@ -322,7 +322,7 @@ def _lightnesses(values, names):
     for v, n in zip(values, names):
         v = np.asarray(check_finite(v, n), float)
         if np.any(v < 0):
-            raise InvalidInputError(f"{n} must be >= 0 (CIELAB lightness), got min {v.min()!r}")
+            raise InvalidInputError(f"{n} must be >= 0 (CIELAB lightness), got min {float(v.min()):g}")
         out.append(v)
     return out
 
@@ -337,12 +337,9 @@ def flop_index_alman1987(L15, L45, L110):
     >>> round(float(flop_index_alman1987(100.0, 50.0, 20.0)), 2)  # 2.69·80^1.11/50^0.86
     12.05
     """
-    L15, L45, L110 = (np.asarray(check_finite(v, n), float) for v, n in ((L15, "L15"), (L45, "L45"), (L110, "L110")))
+    L15, L45, L110 = _lightnesses((L15, L45, L110), ("L*15", "L*45", "L*110"))
     if np.any(L45 <= 0):
         raise InvalidInputError("L*45 must be > 0 for the flop index")
-    for v, nm in ((L15, "L*15"), (L110, "L*110")):
-        if np.any(v < 0):
-            raise InvalidInputError(f"{nm} must be >= 0 (CIELAB lightness), got min {v.min()!r}")
     d = L15 - L110
     return 2.69 * np.sign(d) * np.abs(d) ** 1.11 / L45 ** 0.86
 
