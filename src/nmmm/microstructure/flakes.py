@@ -301,6 +301,21 @@ def _draw_flakes(rng, n, box, ddist, tdist, tilt_std_deg):
     return xy, d, t, tilt, normals
 
 
+def _deposit_args(box_nm, diameter_nm, thickness_nm, tilt_std_deg, exclusion_nm):
+    """The checked arguments shared by :func:`flake_deposit` and :func:`flake_deposit_capacity`
+    -> (box (3 floats, nm), diameter distribution, thickness distribution)."""
+    box = tuple(float(b) for b in check_positive(np.asarray(box_nm, float), "box_nm"))
+    if len(box) != 3:
+        raise InvalidInputError(f"box_nm must be (Lx, Ly, layer thickness) in nm, got {box_nm!r}")
+    ddist = as_size_distribution(diameter_nm, "diameter_nm")
+    tdist = as_size_distribution(thickness_nm, "thickness_nm")
+    if not (math.isfinite(tilt_std_deg) and 0 <= tilt_std_deg <= 90):
+        raise InvalidInputError(f"tilt_std_deg must lie in [0, 90] degrees, got {tilt_std_deg!r}")
+    if not (math.isfinite(exclusion_nm) and exclusion_nm >= 0):
+        raise InvalidInputError(f"exclusion_nm must be >= 0 nm, got {exclusion_nm!r}")
+    return box, ddist, tdist
+
+
 def _height_grid(box, ddist, grid_nm):
     """Pixel (nm, per axis) and shape of the deposit's height map."""
     if grid_nm is None:
@@ -349,15 +364,7 @@ def flake_deposit_capacity(
     falls as the cell grows (more towers to reach the top). Same arguments as
     :func:`flake_deposit`.
     """
-    box = tuple(float(b) for b in check_positive(np.asarray(box_nm, float), "box_nm"))
-    if len(box) != 3:
-        raise InvalidInputError(f"box_nm must be (Lx, Ly, layer thickness) in nm, got {box_nm!r}")
-    ddist = as_size_distribution(diameter_nm, "diameter_nm")
-    tdist = as_size_distribution(thickness_nm, "thickness_nm")
-    if not (math.isfinite(tilt_std_deg) and 0 <= tilt_std_deg <= 90):
-        raise InvalidInputError(f"tilt_std_deg must lie in [0, 90] degrees, got {tilt_std_deg!r}")
-    if not (math.isfinite(exclusion_nm) and exclusion_nm >= 0):
-        raise InvalidInputError(f"exclusion_nm must be >= 0 nm, got {exclusion_nm!r}")
+    box, ddist, tdist = _deposit_args(box_nm, diameter_nm, thickness_nm, tilt_std_deg, exclusion_nm)
     realisations = int(realisations)
     if realisations < 1:
         raise InvalidInputError(f"realisations must be >= 1, got {realisations!r}")
@@ -432,17 +439,9 @@ def flake_deposit(
         When the deposit would rise above the layer thickness (too many or too thick
         flakes for the layer; the message gives the height reached).
     """
-    box = tuple(float(b) for b in check_positive(np.asarray(box_nm, float), "box_nm"))
-    if len(box) != 3:
-        raise InvalidInputError(f"box_nm must be (Lx, Ly, layer thickness) in nm, got {box_nm!r}")
-    ddist = as_size_distribution(diameter_nm, "diameter_nm")
-    tdist = as_size_distribution(thickness_nm, "thickness_nm")
+    box, ddist, tdist = _deposit_args(box_nm, diameter_nm, thickness_nm, tilt_std_deg, exclusion_nm)
     if mode not in ("deposit", "boolean"):
         raise InvalidInputError(f"mode must be 'deposit' or 'boolean', got {mode!r}")
-    if not (math.isfinite(tilt_std_deg) and 0 <= tilt_std_deg <= 90):
-        raise InvalidInputError(f"tilt_std_deg must lie in [0, 90] degrees, got {tilt_std_deg!r}")
-    if not (math.isfinite(exclusion_nm) and exclusion_nm >= 0):
-        raise InvalidInputError(f"exclusion_nm must be >= 0 nm, got {exclusion_nm!r}")
     rng = np.random.default_rng(seed)
     area = box[0] * box[1]
     mean_v = math.pi / 4 * ddist.moment(2) * tdist.mean_nm
