@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from nmmm.appearance.brdf.interpolation import _angle_pos_nb
+
 try:  # pragma: no cover - numba is a dependency, the fallback only guards odd installs
     import numba as _nb
 
@@ -56,19 +58,6 @@ if _nb is not None:
     _ggx_weight = _nb.njit(inline="always", fastmath=True, cache=True)(_ggx_weight_py)
 else:  # pragma: no cover
     _ggx_weight = _ggx_weight_py
-
-
-def _angle_pos(x, n_nodes):
-    """Node index and fraction of position ``x`` (angle / step) on ``n_nodes`` nodes (last interval closed)."""
-    x = min(max(x, 0.0), n_nodes - 1.000001)
-    i = int(x)
-    return i, x - i
-
-
-if _nb is not None:
-    _angle_pos_nb = _nb.njit(inline="always", fastmath=True, cache=True)(_angle_pos)
-else:  # pragma: no cover
-    _angle_pos_nb = _angle_pos
 
 
 def _kernel_py(wi, wo, out, Fs, Tc, Rf, a_tab, den, step, dstep, n, alpha, tau, tau_e, ext, eext, kb, Dms,

@@ -9,6 +9,7 @@ are shared by the table builder, the NumPy path and the discrete-flake code.
   0.5° nodes of the 1-D tables, as T(θ) G(θ) with G = (1 − E⁰)/T interpolated (see there).
 - ``_lerp_table`` — (NT, L) table at angles (P,) → (P, L) (Numba loop for large inputs).
 - ``_lerp1`` — the same for a 1-D table; ``_deg`` — arccos in degrees.
+- ``_angle_pos_nb`` — node index and fraction of an angle on such a grid, inside the Numba kernels.
 - ``_phi_mean`` — (1 − e⁻ˣ)/x, the mean attenuation through a slab.
 - ``_hemi_mean`` — cosine-weighted hemispherical mean 2∫ v(μ) μ dμ.
 """
@@ -109,3 +110,16 @@ def _refine_deficit(D, T, astep, Tc, step, R=None, Rc=None):
     if R is not None:
         return Rc + Tc * _lerp_table(G, th, astep)
     return np.clip(Tc * _lerp_table(G, th, astep), 0.0, 1.0)
+
+
+def _angle_pos(x, n_nodes):
+    """Node index and fraction of position ``x`` (angle / step) on ``n_nodes`` nodes (last interval closed)."""
+    x = min(max(x, 0.0), n_nodes - 1.000001)
+    i = int(x)
+    return i, x - i
+
+
+if _nb is not None:
+    _angle_pos_nb = _nb.njit(inline="always", fastmath=True, cache=True)(_angle_pos)
+else:  # pragma: no cover
+    _angle_pos_nb = _angle_pos

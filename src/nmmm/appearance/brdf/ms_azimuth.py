@@ -41,8 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nmmm.appearance.brdf.fused_kernel import _angle_pos_nb
-from nmmm.appearance.brdf.interpolation import _NA, _deg, _lerp1, _lerp_table
+from nmmm.appearance.brdf.interpolation import _NA, _angle_pos_nb, _deg, _lerp1, _lerp_table
 
 try:  # pragma: no cover - numba is a dependency, the fallback only guards odd installs
     import numba as _nb
