@@ -4,7 +4,8 @@ What it reports
 ---------------
 1. Cost of one COCG iteration against the bare FFT pair a user would write: a vector field
    (d components) forward and back with scipy.fft (2 workers, in place). nmmm's iteration does
-   d forward FFTs and one inverse (the Willot operators' rank-one form). Target: ratio <= 1.3.
+   one forward and one inverse FFT of a scalar field (the Willot operators' potential form, with
+   the divergence and gradient stencils in real space). Target: ratio <= 1.3.
    Here x is not formed (``keep_x=False``, as ``fft_permittivity`` solves one loading: no x
    pass); ``run_all.py``'s FFT row forms it (one more pass: read x and p, write x).
 2. Projections (iterations) against contrast for COCG (default), BiCGStab, GMRES,

@@ -11,13 +11,18 @@ its FFTs:
   Σ ε p·p (which equals pᵀ Γ ε p because Γ p = p).
 - :func:`cocg_update` — x ← x + α p, r ← r − α q, returning rᵀr and ‖r‖².
 - :func:`mean_flux` — ⟨ε (E0 + x)⟩.
-- :func:`potential` and :func:`stencil_gradient` / :func:`cocg_update_stencil` — the
-  rank-one form of Γ for the Willot operators: Γ ŵ = k s with the scalar s = kᴴ ŵ / |k|², and
-  k_j = phase(q) · D_j(q) / h_j where D_j is the symbol of a real-space finite-difference
-  stencil (forward difference for "willot2014"; the difference across the 2×2×2 voxel cube
-  for "willot2015", with phase e^{−i Σ q/2} / 8i). So one inverse FFT of the scalar potential
-  ψ = F⁻¹(phase · s) replaces the d inverse FFTs of Γ ŵ, and the gradient D ψ is taken in
-  real space — fused into the COCG update, which then reads one scalar field instead of q.
+- :func:`stencil_divergence`, :func:`inverse_laplacian` and :func:`stencil_gradient` /
+  :func:`cocg_update_stencil` — the rank-one form of Γ for the Willot operators: Γ ŵ = k s with
+  the scalar s = kᴴ ŵ / |k|², and k_j = phase(q) · D_j(q) / h_j where D_j is the symbol of a
+  real-space finite-difference stencil (forward difference for "willot2014"; the difference
+  across the 2×2×2 voxel cube for "willot2015", with phase e^{−i Σ q/2} / 8i). The phase cancels
+  in k s, so Γ w = D ψ / h with the potential ψ = Δ⁻¹ Dᵀ w / h, Δ = Σ_j D_jᵀ D_j / h_j²: the
+  divergence Dᵀ w / h is taken in real space, then one forward FFT, the element-wise 1/Δ(q) and
+  one inverse FFT of that scalar field; the gradient D ψ is taken in real space too — fused into
+  the COCG update, which then reads one scalar field instead of q. Two FFTs of a scalar field per
+  iteration, where the spectral form of Γ takes d forward and d inverse FFTs of a vector field
+  (the potential form of FFT-accelerated finite elements, Ladecký et al. 2023, Appl. Math.
+  Comput. 446, 127835; arXiv:2203.02962).
 
 The two passes of each COCG iteration (:func:`direction_and_eps`, :func:`cocg_update_stencil`)
 run on the real views of the complex fields, with β, α and ε split into real and imaginary
@@ -62,6 +67,11 @@ _kernel = njit(cache=True, fastmath=True, nogil=True)
 #: (two builds of the same ``_cocg_update`` gave x differing in half its values). The reductions
 #: may reassociate, and so vectorise: float64 sums of float32 terms, which move by ~1e-16 relative.
 _kernel_split = njit(cache=True, fastmath={"nnan", "ninf", "nsz", "arcp", "reassoc", "afn"}, nogil=True)
+#: Element-wise kernels without reductions (:func:`_stencil_divergence`, :func:`_inverse_laplacian`):
+#: no fast-math at all. Their sums of stencil terms vectorise as written; with ``reassoc`` LLVM
+#: associated them differently in the vector body and in the alignment peel, so the bits of a
+#: voxel depended on the address of the output array (measured: 1e-16 relative, run to run).
+_kernel_exact = njit(cache=True, nogil=True)
 
 
 @njit(inline="always")
@@ -352,29 +362,83 @@ def project(F, a, b, ny, has_ny, mode):
     return F
 
 
-@_kernel
-def _potential(F, psi, a, b, ph, lo, hi):
-    """Planes lo..hi−1: psi ← phase(q) · kᴴ F̂ / |k|² (0 at k = 0), F̂ (3, N1, N2, N3); no Nyquist rule."""
-    n1, n2, n3 = F.shape[1], F.shape[2], F.shape[3]
+@_kernel_exact
+def _stencil_divergence(F, s, kind, ih, lo, hi):
+    """Planes lo..hi−1: s ← Σ_j D_jᵀ F_j / h_j, the real-space divergence adjoint to the gradient
+    stencil of :func:`_grad_real` (so that its transform is Σ_j conj(D_j) F̂_j / h_j): backward
+    differences (kind 1) or differences across the voxel cube x − {0, 1}³ (kind 2). Real views
+    F (3, N1, N2, 2N3), s (N1, N2, 2N3); a stencil acts on real and imaginary parts alike, and the
+    previous voxel along the row (k − 2, periodic) is read with the wrap outside the loop."""
+    n1, n2, m = s.shape
+    h0, h1, h2 = ih[0], ih[1], ih[2]
+    for i1 in range(n1):
+        if i1 < lo or i1 >= hi:
+            continue
+        j1 = i1 - 1 if i1 > 0 else n1 - 1
+        for i2 in range(n2):
+            j2 = i2 - 1 if i2 > 0 else n2 - 1
+            out = s[i1, i2]
+            if kind == 1:
+                xa = F[0, i1, i2]
+                xc = F[0, j1, i2]
+                ya = F[1, i1, i2]
+                yb = F[1, i1, j2]
+                za = F[2, i1, i2]
+                for k in range(2):
+                    km = k + m - 2
+                    out[k] = h0 * (xc[k] - xa[k]) + h1 * (yb[k] - ya[k]) + h2 * (za[km] - za[k])
+                for k in range(2, m):
+                    out[k] = h0 * (xc[k] - xa[k]) + h1 * (yb[k] - ya[k]) + h2 * (za[k - 2] - za[k])
+            else:
+                # row sums over the other two axes' {0, 1} offsets: x over (i2, j2), y over (i1, j1), z over all four
+                xa = F[0, i1, i2]
+                xb = F[0, i1, j2]
+                xc = F[0, j1, i2]
+                xd = F[0, j1, j2]
+                ya = F[1, i1, i2]
+                yb = F[1, i1, j2]
+                yc = F[1, j1, i2]
+                yd = F[1, j1, j2]
+                za = F[2, i1, i2]
+                zb = F[2, i1, j2]
+                zc = F[2, j1, i2]
+                zd = F[2, j1, j2]
+                for k in range(m):
+                    km = k - 2 if k >= 2 else k + m - 2
+                    dx = (xc[k] + xc[km] + xd[k] + xd[km]) - (xa[k] + xa[km] + xb[k] + xb[km])
+                    dy = (yb[k] + yb[km] + yd[k] + yd[km]) - (ya[k] + ya[km] + yc[k] + yc[km])
+                    dz = (za[km] + zb[km] + zc[km] + zd[km]) - (za[k] + zb[k] + zc[k] + zd[k])
+                    out[k] = h0 * dx + h1 * dy + h2 * dz
+
+
+@_kernel_exact
+def _inverse_laplacian(S, sq, kind, ih2, lo, hi):
+    """Planes lo..hi−1: Ŝ ← Ŝ / Λ(q) (0 where Λ = 0: k = 0 and the rotated scheme's null modes), Λ =
+    Σ_j |D_j(q)|² / h_j² the symbol of Σ_j D_jᵀ D_j / h_j²; sq = (4 sin²(q/2), 4 cos²(q/2)) per axis
+    (2, 3, Nmax) with exact zeros, S the real view (N1, N2, 2N3) of the transform."""
+    n1, n2, m = S.shape
+    n3 = m // 2
     for i1 in range(n1):
         if i1 < lo or i1 >= hi:
             continue
         for i2 in range(n2):
-            ab = a[0, i1] * b[1, i2]
-            ba = b[0, i1] * a[1, i2]
-            bb = b[0, i1] * b[1, i2]
-            p12 = ph[0, i1] * ph[1, i2]
+            if kind == 1:
+                c1 = sq[0, 0, i1] * ih2[0] + sq[0, 1, i2] * ih2[1]
+                c2 = 0.0 * c1
+                c3 = ih2[2] + 0.0 * c1
+            else:
+                c1 = sq[0, 0, i1] * sq[1, 1, i2] * ih2[0]
+                c2 = sq[1, 0, i1] * sq[0, 1, i2] * ih2[1]
+                c3 = sq[1, 0, i1] * sq[1, 1, i2] * ih2[2]
+            row = S[i1, i2]
             for i3 in range(n3):
-                k1 = ab * b[2, i3]
-                k2 = ba * b[2, i3]
-                k3 = bb * a[2, i3]
-                n2k = (k1.real * k1.real + k1.imag * k1.imag + k2.real * k2.real + k2.imag * k2.imag
-                       + k3.real * k3.real + k3.imag * k3.imag)
-                s = np.conj(k1) * F[0, i1, i2, i3] + np.conj(k2) * F[1, i1, i2, i3] + np.conj(k3) * F[2, i1, i2, i3]
-                if n2k > 0.0:
-                    psi[i1, i2, i3] = (p12 * ph[2, i3]) * (s * (1.0 / n2k))
+                if kind == 1:
+                    lam = c1 + c3 * sq[0, 2, i3]
                 else:
-                    psi[i1, i2, i3] = 0
+                    lam = (c1 + c2) * sq[1, 2, i3] + c3 * sq[0, 2, i3]
+                w = 1.0 / lam if lam > 0.0 else 0.0 * lam
+                row[2 * i3] = row[2 * i3] * w
+                row[2 * i3 + 1] = row[2 * i3 + 1] * w
 
 
 @njit(inline="always")
@@ -507,10 +571,33 @@ def _cocg_update_stencil(r, psi, a_re, a_im, kind, ih, part, lo, hi):
         part[i1, 2] = nr
 
 
-def potential(F, psi, a, b, ph):
-    """psi ← phase · kᴴ F̂ / |k|² on the Fourier transform F̂ (3, N1, N2, N3) of a vector field."""
-    _split(_potential, F.shape[1], F, F, psi, a, b, ph)
-    return psi
+def stencil_divergence(F, s, kind, ih):
+    """s ← Σ_j D_jᵀ F_j / h_j (real space, F (3, N1, N2, N3), s (N1, N2, N3) complex)."""
+    _split(_stencil_divergence, s.shape[0], F, _real_view(F), _real_view(s), kind, ih)
+    return s
+
+
+def inverse_laplacian(S, sq, kind, ih):
+    """Ŝ ← Ŝ / Σ_j |D_j(q)|² / h_j² in place (0 where that vanishes); ``sq`` from :func:`stencil_symbols`."""
+    ih2 = (np.asarray(ih) ** 2).astype(sq.dtype)
+    _split(_inverse_laplacian, S.shape[0], S, _real_view(S), sq, kind, ih2)
+    return S
+
+
+def stencil_symbols(shape, dtype) -> np.ndarray:
+    """(4 sin²(q/2), 4 cos²(q/2)) per axis, shape (2, 3, Nmax), real ``dtype``: |e^{iq} − 1|² and
+    |e^{iq} + 1|², with exact zeros at q = 0 and at the Nyquist index of an even axis."""
+    nmax = max(shape)
+    sq = np.zeros((2, 3, nmax))
+    for j, n in enumerate(shape):
+        q = 2.0 * np.pi * np.arange(n) / n
+        sn, cs = np.sin(q / 2.0), np.cos(q / 2.0)
+        sn[0] = 0.0
+        if n % 2 == 0:
+            cs[n // 2] = 0.0
+        sq[0, j, :n] = 4.0 * sn**2
+        sq[1, j, :n] = 4.0 * cs**2
+    return sq.astype(dtype)
 
 
 def stencil_gradient(psi, F, kind, ih):

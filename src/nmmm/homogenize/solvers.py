@@ -80,17 +80,15 @@ def _local_threads(solve):
 
 
 def _stencil_form(op: GreenOperator, dtype):
-    """(kind, phase factors (3, Nmax), 1/h (3,)) when Γ of ``op`` has the rank-one stencil form
-    k_j = phase(q) D_j(q) / h_j (kernels :func:`~nmmm.homogenize.kernels.potential`): kind 1 for
-    "willot2014" (D_j = e^{iq_j} − 1, phase 1), 2 for "willot2015" (D_j = (e^{iq_j} − 1)
+    """(kind, stencil symbols (2, 3, Nmax), 1/h (3,)) when Γ of ``op`` has the rank-one stencil form
+    k_j = phase(q) D_j(q) / h_j (kernels :func:`~nmmm.homogenize.kernels.stencil_divergence`): kind 1
+    for "willot2014" (D_j = e^{iq_j} − 1, phase 1), 2 for "willot2015" (D_j = (e^{iq_j} − 1)
     Π_{l≠j} (e^{iq_l} + 1), phase e^{−i Σ q / 2} / 8i); None otherwise (the d-FFT path is used).
     The factors are checked against the operator's own, so a change there cannot go unnoticed."""
     kinds = {"willot2014": 1, "willot2015": 2}
     if op.name not in kinds or op.ndim != 3:
         return None
     kind = kinds[op.name]
-    nmax = max(op.shape)
-    ph = np.zeros((3, nmax), dtype=np.complex128)
     ih = np.ones(3)
     for j, n in enumerate(op.shape):
         q = 2.0 * np.pi * np.arange(n) / n
@@ -105,11 +103,8 @@ def _stencil_form(op: GreenOperator, dtype):
         if not (np.allclose(op.a[j], a_ref * ih[j], rtol=1e-12, atol=1e-12)
                 and np.allclose(op.b[j], b_ref, rtol=1e-12, atol=1e-12)):
             return None
-        ph[j, :n] = phase
-    if kind == 2:
-        ph[0] /= 8j  # k_j = Π phase · (1/2i)(1/2)(1/2) · D_j / h_j
     real = np.float32 if np.dtype(dtype) == np.complex64 else np.float64
-    return kind, ph.astype(dtype), ih.astype(real)
+    return kind, kernels.stencil_symbols(op.shape, real), ih.astype(real)
 
 
 class Problem:
@@ -145,12 +140,16 @@ class Problem:
 
     def potential(self, F: np.ndarray) -> np.ndarray:
         """The scalar potential ψ of Γ F (Γ F = D ψ / h, :mod:`~nmmm.homogenize.kernels`), for a
-        :attr:`stencil` operator: d forward FFTs of F (F is overwritten) and one inverse FFT."""
-        kind, ph, ih = self.stencil
-        G = F.reshape((self.d,) + self.shape)
-        Gh = scipy.fft.fftn(G, axes=self._axes, workers=self.workers, overwrite_x=True)
-        kernels.potential(Gh, self.psi, self._a, self._b, ph)
-        psi = scipy.fft.ifftn(self.psi, workers=self.workers, overwrite_x=True)
+        :attr:`stencil` operator: ψ = Δ⁻¹ Dᵀ F / h with Δ = Σ_j D_jᵀ D_j / h_j². The divergence is
+        taken in real space, so one forward and one inverse FFT of a scalar field replace the d
+        forward FFTs of F and the inverse one of the spectral form ψ̂ = kᴴ F̂ / |k|² (the same
+        operator: the symbol of Dᵀ is conj(D)). The potential formulation of FFT-accelerated
+        finite elements: Ladecký et al. (2023), Appl. Math. Comput. 446, 127835 (arXiv:2203.02962). F is not changed."""
+        kind, sq, ih = self.stencil
+        kernels.stencil_divergence(F.reshape((self.d,) + self.shape), self.psi, kind, ih)
+        S = scipy.fft.fftn(self.psi, workers=self.workers, overwrite_x=True)
+        kernels.inverse_laplacian(S, sq, kind, ih)
+        psi = scipy.fft.ifftn(S, workers=self.workers, overwrite_x=True)
         if psi is not self.psi and not np.shares_memory(psi, self.psi):
             self.psi[...] = psi
         self.projections += 1
@@ -159,7 +158,7 @@ class Problem:
     def project_inplace(self, F: np.ndarray, mode: int = 0) -> np.ndarray:
         """F ← Γ F (mode 0) or (I − 2Γ) F (mode 1), F a (d, N) real-space field; in place."""
         if mode == 0 and self.stencil is not None:
-            kind, ph, ih = self.stencil
+            kind, _, ih = self.stencil
             psi = self.potential(F)
             kernels.stencil_gradient(psi, F.reshape((self.d,) + self.shape), kind, ih)
             return F
