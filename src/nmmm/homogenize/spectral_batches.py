@@ -236,6 +236,8 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
     iterations = np.zeros((nw, len(dirs)), dtype=int)
     solver = np.empty((nw, len(dirs)), dtype=object)
     green_used = np.empty((nw, len(dirs)), dtype=object)
+    per_solve = {k: np.full((nw, len(dirs)), np.nan) for k in ("flux_error", "offdiagonal_error", "residual_reached")}
+    per_solve["stop"] = np.empty((nw, len(dirs)), dtype=object)
     hist = [[None] * len(dirs) for _ in range(nw)]
     whole, per_wl, projections = [], [], {}
     for lo, hi, js, r, _, _ in parts:
@@ -245,6 +247,9 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
         iterations[lo:hi, cols] = r.iterations
         solver[lo:hi, cols] = r.solver
         green_used[lo:hi, cols] = r.metadata["green_used"]
+        for k, a in per_solve.items():
+            if k in r.metadata:
+                a[lo:hi, cols] = r.metadata[k]
         for w in range(hi - lo):
             for i, c in enumerate(cols):
                 hist[lo + w][c] = r.residual_history[w][i]
@@ -262,6 +267,7 @@ def fft_permittivity_spectrum(labels, eps, *, wavelength_nm=None, scheduler: str
     first = parts[0][3]
     meta = dict(first.metadata)
     meta["green_used"] = green_used
+    meta.update({k: a for k, a in per_solve.items() if k in first.metadata})
     if projections:
         meta["projections"] = [projections[c] for c in sorted(projections)]
     meta["chunks"] = [(lo, hi, sec) for lo, hi, _, _, sec, _ in parts]
