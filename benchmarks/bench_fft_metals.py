@@ -5,13 +5,20 @@ permittivity in a dielectric of ε = 2.25, the script runs ``fft_permittivity`` 
 defaults (``green=None``: automatic operator, COCG, fallbacks on), complex64 asked, tol 1e-5,
 one loading (x), and prints one table row: operator used, every automatic switch (including
 the promotion to complex128 that ``green=None`` makes for low-loss metals, where complex64
-stalls above 1e-5), projections, wall time and ε_xx. With ``--compare`` it also runs COCG with each Willot operator fixed
-(no fallback) to show what the automatic choice is choosing between.
+stalls above 1e-5), the rule the solve converged on (``stop="auto"``: the residual, or COCG's flux
+rule with its estimated error of ε_xx and the bound on the column's off-diagonal terms) and the
+relative residual reached, projections, wall time and ε_xx. ``--true-residual`` also forms the field the
+solve stopped at (a second solve) and prints ‖b − A x‖ / ‖b‖; ``--reference`` solves to a residual of
+1e-9 (complex128, same operator, no stall check) and prints ε_xx's relative error against it. With
+``--compare`` it also runs COCG with each Willot operator fixed (no fallback) to show what the
+automatic choice is choosing between.
 
 Usage::
 
     python benchmarks/bench_fft_metals.py                       # 64³, all cells and metals
     python benchmarks/bench_fft_metals.py --grids 64 128        # also 128³ (≈ 1-3 min per row)
+    python benchmarks/bench_fft_metals.py --grids 64 --maxiter 500 --true-residual --reference
+    python benchmarks/bench_fft_metals.py --stop residual      # the residual rule only
     python benchmarks/bench_fft_metals.py --compare --cases boolean --eps=-50+2j
     python benchmarks/bench_fft_metals.py --spectrum 64         # aluminium (Rakić), 81 λ, warm starts
     python benchmarks/bench_fft_metals.py --spectrum 64 --scheduler local   # the same on 2 Dask workers
@@ -31,6 +38,78 @@ projections on (``fft.PREDICT``; the 128³ rows below were measured with checks 
 run, the residual reached and the prediction); BiCGStab/GMRES are not tried after such a stop (they
 measured worse there, below). Over several wavelengths a two-phase cell without a low-loss metal is
 solved by one Lanczos run per loading when estimated cheaper (``method="auto"``, reported).
+Without local fields (this script asks none) COCG also converges when the estimated relative error of
+ε_xx is ≤ tol (``stop="auto"``, the flux rule of ``solvers.solve_cocg``: ε_xx as COCG's Gauss
+quadrature of bᵀA⁻¹b, its error estimated by its path over the last 30 projections; reported).
+
+Measured, session 6 (2026-12-05, load 1-2.4 on 2 cores, the 2-FFT iteration of 0a2798a; defaults, complex64 asked, tol 1e-5, x)
+--------------------------------------------------------------------------------------------------------------------
+``--grids 64 128 --maxiter 500 --reference`` (64³ also ``--true-residual``: equal to the residual
+reached to 2 digits in every row). "error" is ε_xx's relative error against COCG run to a residual of
+1e-9 (complex128, same operator); "session 5" the projections of the residual rule, below:
+
+| cell | grid | ε metal | operator | converged on | residual reached | projections (session 5) | time (s) | error |
+|---|---|---|---|---|---|---|---|---|
+| boolean (0.20) | 64³ | −50+1i | willot2014 c128 | residual | 9.5e-6 | 304 (304) | 2.0 | 1.3e-7 |
+| boolean (0.20) | 64³ | −50+2i | willot2014 c128 | residual | 9.9e-6 | 293 (293) | 1.6 | 3.0e-8 |
+| boolean (0.20) | 64³ | −50+5i | willot2014 c128 | flux (est. 9e-6) | 1.4e-4 | 263 (276) | 1.6 | 3.1e-8 |
+| boolean (0.20) | 64³ | −44+13i | willot2015 c64 | flux (est. 9e-6) | 1.3e-4 | 134 (181) | 0.6 | 2.7e-7 |
+| hardcore (0.20) | 64³ | −50+1i | willot2014 c128 | flux (est. 1e-5) | 3.1e-4 | 114 (118) | 0.7 | 2.0e-8 |
+| hardcore (0.20) | 64³ | −50+2i | willot2014 c128 | flux (est. 8e-6) | 1.7e-4 | 114 (117) | 0.7 | 1.1e-8 |
+| hardcore (0.20) | 64³ | −50+5i | willot2014 c128 | flux (est. 9e-6) | 8.5e-5 | 107 (111) | 0.6 | 6.3e-9 |
+| hardcore (0.20) | 64³ | −44+13i | willot2015 c64 | flux (est. 9e-6) | 1.1e-4 | 116 (154) | 0.5 | 1.7e-7 |
+| flakes (0.10) | 64³ | −50+1i | willot2014 c128 | flux (est. 8e-6) | 1.9e-4 | 431 (498) | 2.3 | 6.3e-8 |
+| flakes (0.10) | 64³ | −50+2i | willot2014 c128 | flux (est. 9e-6) | 5.3e-4 | 368 (431) | 2.0 | 2.0e-7 |
+| flakes (0.10) | 64³ | −50+5i | willot2014 c128 | flux (est. 1e-5) | 7.7e-4 | 242 (291) | 1.4 | 3.0e-8 |
+| flakes (0.10) | 64³ | −44+13i | willot2015 c64 | flux (est. 9e-6) | 3.1e-4 | 131 (199) | 0.5 | 4.2e-7 |
+| boolean (0.20) | 128³ | −50+1i | willot2014 c128 | residual | 9.5e-6 | 266 | 14.4 | 1.2e-7 |
+| boolean (0.20) | 128³ | −50+2i | willot2014 c128 | residual | 9.1e-6 | 254 | 12.7 | 1.2e-7 |
+| boolean (0.20) | 128³ | −50+5i | willot2014 c128 | flux (est. 8e-6) | 1.6e-5 | 219 | 10.9 | 5.3e-9 |
+| boolean (0.20) | 128³ | −44+13i | willot2015 c64 | flux (est. 9e-6) | 1.3e-4 | 135 | 4.5 | 2.8e-7 |
+| hardcore (0.20) | 128³ | −50+1i, 2i, 5i | willot2014 c128 | residual | 8-9e-6 | 71 each | 3.9 | 1.3-1.7e-10 |
+| hardcore (0.20) | 128³ | −44+13i | willot2015 c64 | flux (est. 1e-5) | 1.2e-4 | 107 | 3.6 | 5.5e-8 |
+| flakes (0.10) | 128³ | −50+5i | willot2014 c128 | flux (est. 1e-5) | 2.0e-3 | 358 (1000: no) | 20.7 | 1.7e-7 |
+| flakes (0.10) | 128³ | −50+2i | willot2014 c128 | maxiter 500: both operators to 500 (best 0.028, 0.036), ConvergenceError | - | 1000 | 61.8 | - |
+| flakes (0.10) | 128³ | −50+2i | ``--maxiter 2000`` | flux (est. 1e-5) | 1.2e-3 | 816 (1346) | 47.9 | 1.1e-7 |
+| flakes (0.10) | 128³ | −50+1i | willot2014 c128 | maxiter 500: both operators to 500 (best 0.26, 0.27), ConvergenceError | - | 1000 | 59.9 | - |
+| flakes (0.10) | 128³ | −50+1i | ``--maxiter 2000`` | flux (est. 1e-5) | 1.8e-3 | 1497 (2256*) | 89.3 | 7.1e-7 |
+| flakes (0.10) | 128³ | −44+13i | willot2015 c64 | flux (est. 9e-6) | 4.3e-4 | 140 (199) | 5.3 | 2.0e-7 |
+
+(*: the residual rule's count from the replay below.) So item 4 holds for 22 of the 24 cases (≤ 500
+projections, ε_xx within 4.2e-7 of the reference, 0.04 tol); 128³ flakes at −50 + 2i and −50 + 1i
+still need 816 and 1497 projections (ε_xx then 1.1e-7 and 7.1e-7 off; the near-singular
+system above: the flux converges from a residual of 1e-3, not earlier). There the flux's estimate
+extrapolates to ~930 and ~2050 at 300 projections (the residual's: 1431 and 5221), inside 5 ×
+maxiter, so the solve runs to maxiter (500), the other operator too, and the ConvergenceError names
+maxiter ≈ 1.2 × that prediction; with the residual alone −50 + 1i was stopped at 300 on each operator
+(600 projections), −50 + 2i ran to 1000 as here. (128³ flakes at −50 + 1i with the residual rule and
+its stall check: stopped at 325, "stalled" — the residual sits at 0.5 over 25-325 projections while
+the flux's estimate falls; the stall check now also asks the estimate.)
+
+How the flux rule was chosen (``/tmp`` replays of COCG histories run to residual 1e-9, the 24 cases
+above on the old 4-FFT iteration, same operators; counts there differ from the table's by rounding,
+e.g. 128³ flakes −50 + 1i 1456 vs 1497): true relative error of ε_xx at the projection where
+each estimate first says ≤ tol, for tol = 1e-3, 3e-4, ..., 1e-6 (162 stops), as a multiple of tol — the
+plain delayed difference |X_k − X_{k−d}| / |X_k| (Strakoš & Tichý 2002) against the path
+Σ_{last d} |ΔX| / |X_k| (X: the Gauss quadrature in complex128, the iterate's flux in complex64):
+
+| d | 10 | 20 | 30 | 50 | 100 |
+|---|---|---|---|---|---|
+| difference: worst (stops above tol) | 41.7 (44) | 11.4 (15) | 10.9 (11) | 6.8 (9) | 7.6 (6) |
+| path: worst (stops above tol) | 1.09 (1) | 0.19 (0) | 0.14 (0) | 0.21 (0) | 0.22 (0) |
+
+The difference fails on the 128³ flakes at −50 + 1i, where ε_xx circles its limit (a10 stopped at
+855 with a true error of 4.2e-4, a100 at 1067 with 7.6e-5; the path waits until 1456). Plateaus
+followed by jumps: the residual has them (128³ flakes −50 + 1i: 0.5 over 25-325 projections, then
+0.1 at 840, 0.01 at 1240); the quadrature creeps down, non-monotonically but without a 30-projection
+plateau that the path misses (worst 0.14 tol above); the flux of the iterate (error linear in the
+residual) oscillates with the residual. On a wider replay (16³-48³ spheres and
+flakes, 64²-128² discs, both operators, 10 ε from −50 + 0.5i to 12 + 1i: 298 histories, 7 tol) the
+path with d = 20 stopped twice at 1.04 tol (flakes at −50 + 0.5i, willot2015), with d = 30 never above
+0.46 tol (1156 stops): FLUX_WINDOW = 30. The quadrature vs the iterate's flux at a residual of 1e-5:
+error 2e-11 vs 1e-7 (128³ flakes, −50 + 5i); at −50 + 2i the quadrature is within 1e-5 from 685
+projections on, the iterate's flux from 1144. In complex64 the quadrature is biased (5e-5 at 64³,
+1.3e-3 at 128³ from the first step), hence the iterate's flux there.
 
 Measured, session 5 (2026-12-04, load 4-7 on 2 cores, defaults, complex64 asked, tol 1e-5, x, maxiter 500)
 -----------------------------------------------------------------------------------------------
@@ -163,6 +242,59 @@ def run(lab, eps, **kw):
     return r, int(np.sum(r.iterations)), time.perf_counter() - t, ""
 
 
+def describe_stop(r) -> str:
+    """How the solve converged: 'residual', or 'flux (est. e, off-diag. o)' for COCG's flux rule, and
+    the relative residual reached (the recurrence's; ``true_residual`` forms the field)."""
+    stop = str(np.atleast_1d(r.metadata.get("stop", ["residual"]))[0])
+    res = float(np.atleast_1d(r.metadata.get("residual_reached", [r.residual_history[-1]]))[0])
+    if stop == "flux":
+        est = float(np.atleast_1d(r.metadata["flux_error"])[0])
+        off = float(np.atleast_1d(r.metadata["offdiagonal_error"])[0])
+        return f"flux (est. {est:.1g}, off-diag. {off:.1g}) | {res:.1e}"
+    return f"residual | {res:.1e}"
+
+
+def true_residual(lab, eps, r, tol=1e-5) -> float:
+    """‖b − A x‖ / ‖b‖ of the field the default solve stops at, formed: the same COCG (operator,
+    precision, flux rule) rerun with the field kept (fft_permittivity forms no field without
+    return_fields)."""
+    from nmmm.homogenize.fft import _compact_labels
+    from nmmm.homogenize.green import green_operator
+    from nmmm.homogenize.solvers import FLUX_TOL_MIN, Problem, _norm, solve_cocg
+
+    compact, values, _ = _compact_labels(lab)
+    green = str(np.atleast_1d(r.metadata["green_used"])[0])
+    prob = Problem(compact, values.size, green_operator(lab.shape, green), np.dtype(r.dtype), 2)
+    tab = prob.tab([eps[int(v)] for v in values])
+    e0 = np.zeros(lab.ndim)
+    e0[0] = 1.0
+    flux_tol = tol if tol >= FLUX_TOL_MIN[prob.dtype] else None  # as fft_permittivity gives it
+    out = solve_cocg(prob, tab, e0, tol=tol, maxiter=int(np.sum(r.iterations)) + 5, keep_x=True, flux_tol=flux_tol,
+                     stall_window=None)
+    b = prob.rhs(tab, e0)
+    return _norm(b - prob.apply(out.x, tab)) / _norm(b)
+
+
+def reference_exx(lab, eps, r) -> complex:
+    """ε_xx of COCG to a relative residual of 1e-9 (residual rule, no stall check: 128³ flakes at
+    −50 + 1i keep a residual of 0.5 over 25-325 projections) with the operator of the default solve,
+    in complex128."""
+    from nmmm.homogenize.fft import _compact_labels
+    from nmmm.homogenize.green import green_operator
+    from nmmm.homogenize.solvers import Problem, solve_cocg
+
+    compact, values, _ = _compact_labels(lab)
+    green = str(np.atleast_1d(r.metadata["green_used"])[0])
+    prob = Problem(compact, values.size, green_operator(lab.shape, green), np.complex128, 2)
+    e0 = np.zeros(lab.ndim)
+    e0[0] = 1.0
+    out = solve_cocg(prob, prob.tab([eps[int(v)] for v in values]), e0, tol=1e-9, maxiter=20000, keep_x=False,
+                     stall_window=None)
+    if not out.converged:
+        raise RuntimeError(f"reference solve: {out.message}")
+    return complex(out.flux[0])
+
+
 def describe_switches(r) -> str:
     """Each automatic switch: from→to, and for a solve stopped early the projections it ran, the
     residual it reached and the projections its extrapolation predicted."""
@@ -184,9 +316,12 @@ def describe_error(e) -> str:
     return "no convergence — " + "; ".join(parts)
 
 
-def table(cases, grids, metals, compare: bool, maxiter: int):
-    print("\n| cell | grid | ε metal | operator | switches | projections | ≤ 500 | time (s) | ε_xx |")
-    print("|---|---|---|---|---|---|---|---|---|")
+def table(cases, grids, metals, compare: bool, maxiter: int, stop: str = "auto", check_residual: bool = False,
+          reference: bool = False):
+    print(f"\n| cell | grid | ε metal | operator | switches | stop={stop}: converged on | residual reached | "
+          f"projections | ≤ 500 | time (s) | ε_xx |" + (" true residual |" if check_residual else "")
+          + (" error vs ref (tol 1e-9) |" if reference else ""))
+    print("|---|---|---|---|---|---|---|---|---|---|---|" + ("---|" if check_residual else "") + ("---|" if reference else ""))
     for n in grids:
         for case in cases:
             lab = cell(case, n)
@@ -197,15 +332,22 @@ def table(cases, grids, metals, compare: bool, maxiter: int):
                 if compare:
                     variants += [(g, {"green": g, "fallback": False}) for g in ("willot2015", "willot2014")]
                 for label, kw in variants:
-                    r, its, wall, msg = run(lab, eps, maxiter=maxiter, **kw)
+                    r, its, wall, msg = run(lab, eps, maxiter=maxiter, stop=stop, **kw)
                     if r is None:
-                        print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {label} | {msg} | {its} (all attempts) | no | "
+                        print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {label} | {msg} | - | - | {its} (all attempts) | no | "
                               f"{wall:.1f} | - |", flush=True)
                         continue
                     op = r.green if label == "default" else label
-                    print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {op} | {describe_switches(r)} | {its} | "
-                          f"{'yes' if its <= 500 else 'no'} | {wall:.1f} | {complex(np.round(r.tensor[0, 0], 4))} |",
-                          flush=True)
+                    op += " c64" if r.dtype == "complex64" else " c128"
+                    extra = ""
+                    if check_residual:
+                        extra += f" {true_residual(lab, eps, r):.1e} |"
+                    if reference:
+                        ref = reference_exx(lab, eps, r)
+                        extra += f" {abs(r.tensor[0, 0] - ref) / abs(ref):.1e} |"
+                    print(f"| {case} ({frac:.2f}) | {n}³ | {em} | {op} | {describe_switches(r)} | {describe_stop(r)} | "
+                          f"{its} | {'yes' if its <= 500 else 'no'} | {wall:.1f} | {complex(np.round(r.tensor[0, 0], 6))} |"
+                          + extra, flush=True)
 
 
 def spectrum(n: int, directions, scheduler=None, nwl: int = 81, workers: int = 2, lanczos: bool = False,
@@ -306,6 +448,12 @@ def main(argv=None):
     ap.add_argument("--method", default="per_wavelength", choices=["auto", "per_wavelength", "lanczos"],
                     help="--spectrum: fft_permittivity's method= (default per_wavelength, the warm-started solves)")
     ap.add_argument("--speedup", type=int, metavar="N", help="1 process vs --dask-workers Dask workers at N³")
+    ap.add_argument("--stop", default="auto", choices=["auto", "residual"],
+                    help="fft_permittivity's stop= (auto: COCG's flux rule without fields; residual: the residual only)")
+    ap.add_argument("--true-residual", action="store_true",
+                    help="also form the field the solve stopped at (a second solve) and print its true residual")
+    ap.add_argument("--reference", action="store_true",
+                    help="also solve to residual 1e-9 (complex128) and print ε_xx's relative error against it")
     args = ap.parse_args(argv)
     print(f"# FFT homogenization of metal-dielectric cells (load average {os.getloadavg()[0]:.1f}, "
           f"2 workers)")
@@ -315,7 +463,7 @@ def main(argv=None):
         spectrum(args.spectrum, args.spectrum_loadings, args.scheduler, args.n_wavelengths, args.dask_workers,
                  args.lanczos, args.method)
     else:
-        table(args.cases, args.grids, args.eps, args.compare, args.maxiter)
+        table(args.cases, args.grids, args.eps, args.compare, args.maxiter, args.stop, args.true_residual, args.reference)
 
 
 if __name__ == "__main__":

@@ -55,7 +55,11 @@ Known limitations
   (maxiter 500) with no decrease of its residual yet — the check now starts at 0.6 × maxiter
   (``fft.PREDICT``: from 150 on it also stopped solves that converge within maxiter); every
   such stop is in ``switches`` and the ConvergenceError gives the maxiter the prediction asks for. At 64³ all twelve metal cases of
-  benchmarks/bench_fft_metals.py converge within 500 (flakes at −50 + 1i: 498). Real aluminium
+  benchmarks/bench_fft_metals.py converge within 500 (flakes at −50 + 1i: 498). Without local
+  fields COCG also stops when the estimated error of ε_jj is ≤ tol (``stop="auto"``, COCG's Gauss
+  quadrature of bᵀA⁻¹b; reported): 64³ flakes in 242-431, 128³ flakes at −50 + 5i, 2i, 1i in 358,
+  816 and 1497 (ε_xx within 7.1e-7 of a residual-1e-9 solve), so at 128³ −50 + 2i and 1i still
+  exceed 500. Real aluminium
   in the visible (Im ε ≥ 0.19 |ε|, |Im s| ≥ 0.013) is far from this: 118-216 projections per wavelength (x, y).
 - Lanczos (``method="lanczos"``, chosen by ``"auto"`` for two-phase spectra when cheaper) drifts
   from COCG for a low-loss metal in finite precision (64³ flakes at −50 + 1i: 1284 steps against
