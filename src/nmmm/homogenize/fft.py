@@ -514,9 +514,11 @@ def fft_permittivity(
         method_reason = "auto: " + why
         if mkey == "lanczos":
             method_switch = {"what": "method", "from": "per_wavelength", "to": "lanczos", "reason": why}
+    # the flux rule's off-diagonal pairing keeps the field of every loading but the last (solvers.pair_terms)
+    kept = len(dirs) - 1 if (stop == "auto" and not return_fields and key == "cocg" and mkey != "lanczos") else 0
     work = check_fft_work(arr.shape, n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt,
                           metal=metal_dielectric(table), max_memory_gb=max_memory_gb, max_minutes=max_minutes,
-                          advice=work_advice, method=mkey)
+                          advice=work_advice, method=mkey, kept_fields=kept)
     spacing = None
     if voxel_nm is not None:
         spacing = np.broadcast_to(np.asarray(voxel_nm, dtype=float), (d,))

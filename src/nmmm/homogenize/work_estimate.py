@@ -71,9 +71,10 @@ FFT_MAX_MEMORY_GB = round(0.5 * _physical_memory_gb(), 1)
 
 
 def estimate_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None = None, dtype="complex128",
-                      metal: bool = False, method: str = "per_wavelength") -> dict:
+                      metal: bool = False, method: str = "per_wavelength", kept_fields: int = 0) -> dict:
     """Estimated size of an FFT homogenization of a cell of ``shape``; ``method`` "lanczos": one
-    run per loading for all wavelengths (:func:`choose_spectrum_method`).
+    run per loading for all wavelengths (:func:`choose_spectrum_method`). ``kept_fields``: solution
+    fields held beyond one solve's (the flux rule's pairing keeps every loading's but the last).
 
     Returns
     -------
@@ -95,7 +96,7 @@ def estimate_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None =
     # Lanczos runs a complex128 Problem with real float64 vectors whatever dtype was asked (48³
     # spheres, 8 λ, complex64 asked: peak 32-52 MB traced against 21 MB at complex64's size)
     mem_item = 16 if method == "lanczos" else item
-    memory_gb = FIELDS_IN_MEMORY * d * voxels * mem_item / 1e9
+    memory_gb = (FIELDS_IN_MEMORY + int(kept_fields)) * d * voxels * mem_item / 1e9
     projections = PROJECTIONS_METAL if metal else PROJECTIONS_DIELECTRIC
     speed = SECONDS_PER_COMPONENT_VOXEL * (0.6 if item == 8 else 1.0)
     if method == "lanczos":
@@ -143,7 +144,7 @@ def _duration(seconds: float) -> str:
 
 def check_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None = None, dtype="complex128",
                    metal: bool = False, max_memory_gb: float | None = None, max_minutes: float | None = None,
-                   advice: str | None = None, method: str = "per_wavelength") -> dict:
+                   advice: str | None = None, method: str = "per_wavelength", kept_fields: int = 0) -> dict:
     """The estimate of :func:`estimate_fft_work`, or :class:`InvalidInputError` with it when the
     memory exceeds ``max_memory_gb`` (default :data:`FFT_MAX_MEMORY_GB`) or the time
     ``max_minutes`` (default :data:`FFT_MAX_MINUTES`); ``float('inf')`` lifts a limit.
@@ -154,7 +155,7 @@ def check_fft_work(shape, *, n_wavelengths: int = 1, n_loadings: int | None = No
     if not (mem_lim > 0 and min_lim > 0):
         raise InvalidInputError(f"max_memory_gb and max_minutes must be > 0, got {mem_lim:g} and {min_lim:g}")
     e = estimate_fft_work(shape, n_wavelengths=n_wavelengths, n_loadings=n_loadings, dtype=dtype, metal=metal,
-                          method=method)
+                          method=method, kept_fields=kept_fields)
     over = []
     if e["memory_gb"] > mem_lim:
         over.append(f"memory {e['memory_gb']:.3g} GB > {mem_lim:g} GB"
