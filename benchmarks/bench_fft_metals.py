@@ -42,8 +42,13 @@ Without local fields (this script asks none) COCG also converges when the estima
 ε_xx is ≤ tol (``stop="auto"``, the flux rule of ``solvers.solve_cocg``: ε_xx as COCG's Gauss
 quadrature of bᵀA⁻¹b, its error estimated by its path over the last 30 projections; reported).
 
-Measured, session 6 (2026-12-05, load 1-2.4 on 2 cores, the 2-FFT iteration of 0a2798a; defaults, complex64 asked, tol 1e-5, x)
+Measured, session 9 (2026-12-05, load 1-2.4 on 2 cores, the 2-FFT iteration of 0a2798a; defaults, complex64 asked, tol 1e-5, x)
 --------------------------------------------------------------------------------------------------------------------
+81-λ aluminium (Rakić, 380-780 nm) on the 128³ flake cell, 3 loadings, complex64, tol 1e-5, what the
+API chooses (``--spectrum 128 --method auto``, load 1.0-1.7): one Lanczos run per loading (83-216 steps),
+160 s of solve, 2 min 41 s in all with the cell and the table (session 5: 12.4 min with the 4-FFT
+iteration, load 4-10; target 30 min); ε_xx −0.2304+1.3806i at 380 nm, −1.7312+6.0517i at 580 nm.
+
 ``--grids 64 128 --maxiter 500 --reference`` (64³ also ``--true-residual``: equal to the residual
 reached to 2 digits in every row). "error" is ε_xx's relative error against COCG run to a residual of
 1e-9 (complex128, same operator); "session 5" the projections of the residual rule, below:
