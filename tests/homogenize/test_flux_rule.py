@@ -155,3 +155,22 @@ def test_prediction_uses_the_flux_estimate():
         history, flux_estimates = hist, est
 
     assert solve_prediction(Out, 1e-5) == pytest.approx(300, rel=1e-6)
+
+
+def test_pairing_is_dropped_where_its_fields_would_pass_the_memory_limit(cell, reference):
+    """The pairing keeps one field per loading but the last: with a limit between the estimates with and
+    without those fields, the solve runs unpaired (its off-diagonal bound reported) instead of being refused."""
+    from nmmm.homogenize.work_estimate import FIELDS_IN_MEMORY
+
+    field_gb = 3 * cell.size * 16 / 1e9  # one complex128 vector field
+    eps = {0: EPS[0], 1: EPS[1]}
+    paired = fft_permittivity(cell, eps, tol=1e-5, **KW)
+    tight = fft_permittivity(cell, eps, tol=1e-5, max_memory_gb=(FIELDS_IN_MEMORY + 1) * field_gb, **KW)
+    flux_stops = tight.metadata["stop"] == "flux"
+    assert flux_stops.any() and np.all(np.isfinite(tight.metadata["offdiagonal_error"][flux_stops]))
+    assert np.all(np.isnan(paired.metadata["offdiagonal_error"]))  # every term paired
+    scale = np.abs(reference).max()
+    assert np.abs(paired.tensor - reference).max() <= 1e-5 * scale  # paired: every term quadratic
+    assert np.abs(tight.tensor - reference).max() <= 1e-3 * scale  # unpaired: off-diagonal linear in the residual
+    with pytest.raises(InvalidInputError, match="memory"):
+        fft_permittivity(cell, eps, tol=1e-5, max_memory_gb=(FIELDS_IN_MEMORY - 1) * field_gb, **KW)

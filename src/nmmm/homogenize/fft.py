@@ -415,7 +415,8 @@ def fft_permittivity(
         several loadings ε_ij = ε_ji is taken from both loadings' solves, T_ij(x_j) − x_iᵀ r_j / N
         (error quadratic; ≤ 0.015 tol on 24³-48³ spheres and flakes at −50 + 1, 2i and −44 + 13i,
         where the residual rule's are 0.1-0.6 tol); the field of every loading but the last is
-        then kept (one field per loading).
+        then kept (one field per loading; not where those fields would pass ``max_memory_gb``: then no
+        pairing, as with one loading).
         With one loading (``directions=[j]``) the column's off-diagonal terms stay the iterate's
         flux: ``metadata["offdiagonal_error"]`` is their path over the window (11-840× above their
         true error on the 64³-128³ cells); ``stop="residual"`` there when they must be within
@@ -514,11 +515,18 @@ def fft_permittivity(
         method_reason = "auto: " + why
         if mkey == "lanczos":
             method_switch = {"what": "method", "from": "per_wavelength", "to": "lanczos", "reason": why}
-    # the flux rule's off-diagonal pairing keeps the field of every loading but the last (solvers.pair_terms)
+    # the flux rule's off-diagonal pairing keeps the field of every loading but the last (solvers.pair_terms);
+    # where those fields would pass the memory limit, no pairing (the off-diagonal terms' path bound is reported)
     kept = len(dirs) - 1 if (stop == "auto" and not return_fields and key == "cocg" and mkey != "lanczos") else 0
-    work = check_fft_work(arr.shape, n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt,
-                          metal=metal_dielectric(table), max_memory_gb=max_memory_gb, max_minutes=max_minutes,
-                          advice=work_advice, method=mkey, kept_fields=kept)
+    work_args = dict(n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt, metal=metal_dielectric(table),
+                     max_memory_gb=max_memory_gb, max_minutes=max_minutes, advice=work_advice, method=mkey)
+    try:
+        work = check_fft_work(arr.shape, kept_fields=kept, **work_args)
+    except InvalidInputError:
+        if not kept:
+            raise
+        work = check_fft_work(arr.shape, **work_args)  # refused here too: the error names the limit
+        kept = 0
     spacing = None
     if voxel_nm is not None:
         spacing = np.broadcast_to(np.asarray(voxel_nm, dtype=float), (d,))
@@ -582,7 +590,7 @@ def fft_permittivity(
     previous = [None] * len(dirs)
     # off-diagonal terms of flux-rule solves from two loadings' fields (solvers.pair_terms): each loading's field is
     # kept until the later loadings' residuals have met it
-    pairs = flux_rule and key == "cocg" and len(dirs) > 1 and tol >= FLUX_TOL_MIN[dt]
+    pairs = flux_rule and key == "cocg" and len(dirs) > 1 and tol >= FLUX_TOL_MIN[dt] and kept > 0
     keep_x = return_fields or (warm_start and nw > 1)  # a single wavelength seeds nothing
     bar = tqdm(total=nw * len(dirs), desc="FFT homogenization", unit="solve",
                disable=(nw * len(dirs) < 4 and work["seconds"] < 60) if progress is None else not progress,
