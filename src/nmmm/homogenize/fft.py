@@ -517,7 +517,8 @@ def fft_permittivity(
             method_switch = {"what": "method", "from": "per_wavelength", "to": "lanczos", "reason": why}
     # the flux rule's off-diagonal pairing keeps the field of every loading but the last (solvers.pair_terms);
     # where those fields would pass the memory limit, no pairing (the off-diagonal terms' path bound is reported)
-    kept = len(dirs) - 1 if (stop == "auto" and not return_fields and key == "cocg" and mkey != "lanczos") else 0
+    kept = len(dirs) - 1 if (stop == "auto" and not return_fields and key == "cocg" and mkey != "lanczos"
+                             and tol >= FLUX_TOL_MIN[dt]) else 0
     work_args = dict(n_wavelengths=table.shape[0], n_loadings=len(dirs), dtype=dt, metal=metal_dielectric(table),
                      max_memory_gb=max_memory_gb, max_minutes=max_minutes, advice=work_advice, method=mkey)
     try:
@@ -635,6 +636,7 @@ def fft_permittivity(
                     attempts.append(out)
                     if out.converged:
                         break
+                    out.x = out.r = None  # a failed attempt's fields: only its history and message are used
                     if fallback and name == "cocg" and (
                             out.message.startswith("predicted slow")
                             or (out.message.startswith("COCG reached maxiter") and out.iterations > PREDICT[0]

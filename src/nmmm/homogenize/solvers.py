@@ -411,6 +411,8 @@ def solve_cocg(problem: Problem, tab, e0, x0=None, tol=1e-6, maxiter=5000, keep_
         rho = rho_new
     if not converged and not message:
         message = f"COCG reached maxiter={maxiter} with relative residual {history[-1]:.3g} > tol={tol:g}"
+        if rule and np.isfinite(flux_error):
+            message += f" (the flux's estimated relative error {flux_error:.2g} > {flux_tol:g})"
     if lazy:
         flux = problem.flux(None, tab, e0) + flux_x / problem.n
     else:
