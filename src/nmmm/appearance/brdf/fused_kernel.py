@@ -26,9 +26,7 @@ except ImportError:  # pragma: no cover
 def _table_pos_py(c, step, n_nodes):
     """Node index and fraction of the angle arccos(c) (c clipped to [0, 1]) on a table of
     ``n_nodes`` nodes ``step`` degrees apart (the last interval is closed)."""
-    x = min(np.arccos(min(max(c, 0.0), 1.0)) * (180.0 / np.pi) / step, n_nodes - 1.000001)
-    i = int(x)
-    return i, x - i
+    return _angle_pos_nb(np.arccos(min(max(c, 0.0), 1.0)) * (180.0 / np.pi) / step, n_nodes)
 
 
 if _nb is not None:
